@@ -1,0 +1,77 @@
+"""Ray-marcher throughput: samples per second of the voldis march, forward and forward+backward+Adam.
+
+Rays start on a sphere of radius 3 around the unit box [-1, 1]^3 and aim at random points inside it,
+like training rays drawn across many views; the field is a random density+colour grid. A "sample" is
+one point on a ray where the fields are evaluated (rays x samples per ray).
+"""
+import time
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..fieldspec import box_transform, field_dict
+from ..render.rays import render_rays
+
+
+def random_rays(n, seed):
+    rng = np.random.default_rng(seed)
+    v = rng.normal(size=(n, 3))
+    o = 3.0 * v / np.linalg.norm(v, axis=1, keepdims=True)
+    d = rng.uniform(-0.8, 0.8, (n, 3)) - o
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return mi.Point3f(*o.T), mi.Vector3f(*d.T), mi.Float(rng.uniform(0, 1, n))
+
+
+def make_integrator(resolution, samples, channels=3, fields=("full",), seed=0):
+    rng = np.random.default_rng(seed)
+    box = box_transform([-1, -1, -1], [1, 1, 1])
+    shape = (resolution,) * 3
+    specs = {role: field_dict(rng.normal(-1, 1, shape + (1,)), rng.normal(0, 1, shape + (channels,)), box)
+             for role in ("full", "bg")}
+    integ = mi.load_dict({"type": "voldis", "samples": samples, **specs}, optimize=False)
+    return integ, [f"{role}.{k}" for role in fields for k in ("density", "color")]
+
+
+def _sync():
+    dr.sync_thread()
+
+
+def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, warmup=2):
+    """Seconds per forward and per training step (forward + backward + Adam) and samples/s of each."""
+    integ, keys = make_integrator(resolution, samples, channels, fields)
+    params = mi.traverse(integ)
+    opt = mi.ad.Adam(lr=1e-2)
+    for k in keys:
+        opt[k] = params[k]
+    params.update(opt)
+    target = mi.Color3f(0.5, 0.4, 0.3)
+    layers = tuple(k.split(".")[0] for k in keys[::2])
+
+    def forward(step):
+        o, d, u = random_rays(batch, step)
+        with dr.suspend_grad():
+            out = render_rays(integ, o, d, u, layers=layers)
+            dr.eval(out)
+        _sync()
+
+    def train(step):
+        o, d, u = random_rays(batch, step)
+        out = render_rays(integ, o, d, u, layers=layers)
+        loss = sum(dr.mean(dr.square(out[lay][0] - target)) for lay in layers)
+        dr.backward(loss)
+        opt.step()
+        params.update(opt)
+        dr.eval(params)
+        _sync()
+
+    result = {}
+    for name, fn in (("forward", forward), ("train", train)):
+        for k in range(warmup):
+            fn(k)
+        t = time.perf_counter()
+        for k in range(steps):
+            fn(warmup + k)
+        seconds = (time.perf_counter() - t) / steps
+        result[name] = {"seconds": seconds, "msps": batch * samples * len(layers) ** 0 / seconds / 1e6}
+    return result

@@ -1,0 +1,66 @@
+"""Render a ``voldis`` scene's sensors into layered EXRs and sRGB PNG previews."""
+import os
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from .io.exr import write_exr
+from .io.images import contact_sheet, depth_to_uint8, to_uint8, write_png
+
+PREVIEW_LAYERS = ("full", "bg", "fg")
+
+
+def render_channels(scene, sensor=0, spp=None, seed=0):
+    """Render one sensor; returns ``{channel name: (H, W) float32}`` with the EXR names
+    (``R, G, B, A, depth.Z, full.R, ...``) of the ``voldis`` integrator's outputs."""
+    integrator = scene.integrator()
+    if not hasattr(integrator, "exr_layers"):
+        raise ValueError("the scene's integrator is not 'voldis'")
+    sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
+    with dr.suspend_grad():
+        image = np.array(mi.render(scene, sensor=sensor, spp=spp or 0, seed=seed), dtype=np.float32)
+    names = ["R", "G", "B"]
+    if mi.has_flag(sensor.film().flags(), mi.FilmFlags.Alpha):
+        names.append("coverage")  # the film's own alpha (ray hit a box); ours is the AOV "A"
+    names += integrator.aov_names()
+    if image.shape[2] != len(names):
+        raise RuntimeError(f"rendered {image.shape[2]} channels, expected {len(names)} ({names})")
+    return {name: image[..., k] for k, name in enumerate(names) if name != "coverage"}
+
+
+def previews(channels, layers):
+    """uint8 previews: main image, each layer's colour (premultiplied, over black) and the depth."""
+    out = {"composite": to_uint8(np.stack([channels[c] for c in "RGB"], axis=-1))}
+    for layer in layers:
+        out[layer] = to_uint8(np.stack([channels[f"{layer}.{c}"] for c in "RGB"], axis=-1))
+    out["depth"] = depth_to_uint8(channels["depth.Z"], channels["A"])
+    return out
+
+
+def write_layers(directory, stem, channels, layers=PREVIEW_LAYERS):
+    """Write ``<stem>.exr`` with every channel, ``<stem>_<layer>.png`` previews and a contact sheet
+    ``<stem>_sheet.png`` (main, layers, depth). Returns the EXR path."""
+    os.makedirs(directory, exist_ok=True)
+    exr = os.path.join(directory, f"{stem}.exr")
+    write_exr(exr, channels)
+    images = previews(channels, [lay for lay in layers if f"{lay}.R" in channels])
+    for name, image in images.items():
+        write_png(os.path.join(directory, f"{stem}_{name}.png"), image)
+    write_png(os.path.join(directory, f"{stem}_sheet.png"), contact_sheet(list(images.values())))
+    return exr
+
+
+def render_scene_files(scene, directory, spp=None, size=None, prefix="view"):
+    """Render every sensor of ``scene`` to ``directory``; ``size`` = (width, height) overrides the
+    films. Returns the EXR paths."""
+    if size is not None:
+        params = mi.traverse(scene)
+        for key in [k for k in params.keys() if k.endswith("film.size")]:
+            params[key] = mi.ScalarVector2u(*size)
+        params.update()
+    paths = []
+    for k, sensor in enumerate(scene.sensors()):
+        channels = render_channels(scene, sensor, spp)
+        paths.append(write_layers(directory, f"{prefix}{k:03d}", channels))
+    return paths

@@ -1,0 +1,32 @@
+"""Build ``radiance_field`` plugin dictionaries from NumPy arrays (for ``mi.load_dict``)."""
+import mitsuba as mi
+import numpy as np
+
+from .activations import inverse_softplus, logit
+
+
+def box_transform(lo, hi):
+    """4x4 matrix mapping the unit cube onto the axis-aligned box [lo, hi]."""
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    m = np.diag([*(hi - lo), 1.0])
+    m[:3, 3] = lo
+    return m
+
+
+def field_dict(density, color, to_world=None):
+    """Plugin dict of a field with raw grids ``density`` (Z, Y, X[, 1]) and ``color`` (Z, Y, X, C)."""
+    density = np.asarray(density, np.float32)
+    if density.ndim == 3:
+        density = density[..., None]
+    out = {"type": "radiance_field", "density": mi.TensorXf(density),
+           "color": mi.TensorXf(np.asarray(color, np.float32))}
+    if to_world is not None:
+        out["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, np.float32))
+    return out
+
+
+def constant_field(sigma, color, to_world=None, shape=(2, 2, 2)):
+    """A homogeneous field: density ``sigma`` (per unit length) and RGB ``color`` everywhere in its box."""
+    density = np.full(shape + (1,), inverse_softplus(sigma), np.float32)
+    rgb = np.broadcast_to(logit(color), shape + (3,))
+    return field_dict(density, rgb, to_world)

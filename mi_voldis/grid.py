@@ -1,0 +1,99 @@
+"""Dense voxel grids packed for fast trilinear lookup.
+
+A grid of resolution (X, Y, Z) holds values at its vertices: vertex (i, j, k) sits at the local
+position (i / (X-1), j / (Y-1), k / (Z-1)) of the unit cube, so the grid spans the cube exactly and
+trilinear upsampling of a grid leaves its interpolant unchanged. Tensors use Mitsuba's volume
+layout, shape (Z, Y, X, C) with x varying fastest.
+
+For lookups, the channels of all of a field's tensors are interleaved per vertex and padded to a
+power of two (``packet_width``): each of the 8 corners of a trilinear lookup is then a single
+packet gather, which on these CPUs was 2-2.6x faster in training than ``dr.Texture3f``.
+"""
+import drjit as dr
+import mitsuba as mi
+
+
+def packet_width(channels):
+    """Smallest power of two >= ``channels``: the per-vertex stride of a packed grid."""
+    width = 1
+    while width < channels:
+        width *= 2
+    return width
+
+
+def grid_shape(tensor):
+    """(X, Y, Z) resolution of a (Z, Y, X, C) tensor."""
+    z, y, x = tensor.shape[:3]
+    return (x, y, z)
+
+
+class _Pack(dr.CustomOp):
+    """Channel interleaving as a custom op: it is a permutation, so its adjoint is a gather too
+    (Dr.Jit's generic adjoint of the scatter would be a scatter-add into every tensor's gradient)."""
+
+    def eval(self, tensors):
+        self.shapes = [t.shape for t in tensors]
+        n = self.shapes[0][0] * self.shapes[0][1] * self.shapes[0][2]
+        self.width = packet_width(sum(s[3] for s in self.shapes))
+        self.vertex = dr.arange(mi.UInt32, n)
+        packed = dr.zeros(mi.Float, n * self.width)
+        for channel, offset, tensor in self._channels(tensors):
+            dr.scatter(packed, dr.gather(mi.Float, tensor.array, self.vertex * tensor.shape[3] + channel),
+                       self.vertex * self.width + offset)
+        return packed
+
+    def _channels(self, tensors):
+        """(channel in its tensor, channel in the packed vertex, tensor) for every channel."""
+        offset = 0
+        for tensor in tensors:
+            for channel in range(tensor.shape[3]):
+                yield channel, offset + channel, tensor
+            offset += tensor.shape[3]
+
+    def backward(self):
+        grad = self.grad_out()
+        flat = [dr.zeros(mi.Float, dr.prod(shape)) for shape in self.shapes]
+        offset = 0
+        for shape, g in zip(self.shapes, flat):
+            for channel in range(shape[3]):
+                dr.scatter(g, dr.gather(mi.Float, grad, self.vertex * self.width + offset + channel),
+                           self.vertex * shape[3] + channel)
+            offset += shape[3]
+        self.set_grad_in("tensors", [mi.TensorXf(g, shape) for g, shape in zip(flat, self.shapes)])
+
+
+def pack(tensors):
+    """Interleave the channels of same-sized (Z, Y, X, C_k) tensors into one flat array.
+
+    Vertex v's channels land at ``[v * W, v * W + sum C_k)`` with ``W = packet_width(sum C_k)``;
+    the padding is zero. Differentiable: gradients of the result flow back to every tensor."""
+    return dr.custom(_Pack, list(tensors))
+
+
+def trilinear(data, shape, width, channels, p, active=True):
+    """Trilinear interpolation of a packed grid at local points ``p`` in [0, 1]^3.
+
+    ``data``: flat array from :func:`pack`; ``shape``: (X, Y, Z); ``width``: its packet width;
+    ``channels``: how many leading channels to return. Points outside the cube are clamped to it
+    (callers mask them). Returns a list of ``channels`` Float arrays.
+
+        v(p) = sum_{corners c} prod_axis (f_axis if c_axis else 1 - f_axis) * V[i + c]
+    with i = floor(p * (res - 1)) and f = p * (res - 1) - i."""
+    sx, sy, sz = shape
+    x = dr.clip(p, 0.0, 1.0) * mi.Vector3f(sx - 1, sy - 1, sz - 1)
+    i = dr.minimum(mi.Vector3u(mi.Vector3i(x)), mi.Vector3u(sx - 2, sy - 2, sz - 2))
+    f = x - mi.Vector3f(i)
+    base = (i.z * sy + i.y) * sx + i.x
+    weights = ((1.0 - f.x, f.x), (1.0 - f.y, f.y), (1.0 - f.z, f.z))
+    n = dr.width(base)
+    out = [mi.Float(0.0) for _ in range(channels)]
+    for dz in (0, 1):
+        for dy in (0, 1):
+            wzy = weights[2][dz] * weights[1][dy]
+            for dx in (0, 1):
+                corner = dr.gather(mi.ArrayXf, data, base + ((dz * sy + dy) * sx + dx), active,
+                                   shape=(width, n))
+                w = wzy * weights[0][dx]
+                for k in range(channels):
+                    out[k] = dr.fma(w, corner[k], out[k])
+    return out

@@ -1,0 +1,37 @@
+"""Layered OpenEXR files: the main image as R, G, B, A and named layers beside it.
+
+Channel names follow the convention Nuke and Blender read: ``R, G, B, A`` (premultiplied) for the
+main image, ``<layer>.R/G/B/A`` for the others, ``depth.Z`` and ``<layer>.Z`` for depths.
+"""
+import os
+
+import numpy as np
+import OpenEXR
+
+
+def write_exr(path, channels):
+    """Write ``{name: (H, W) float array}`` as a ZIP-compressed float32 scanline EXR.
+
+    Written to a temporary file and renamed, so an existing file is never left half-written."""
+    if not channels:
+        raise ValueError(f"{path}: no channels to write")
+    shapes = {np.shape(v) for v in channels.values()}
+    if len(shapes) != 1 or len(next(iter(shapes))) != 2:
+        raise ValueError(f"{path}: all channels must be 2D arrays of one size, got {sorted(shapes)}")
+    data = {name: np.ascontiguousarray(value, dtype=np.float32) for name, value in channels.items()}
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    tmp = f"{path}.tmp.exr"
+    with OpenEXR.File(header, data) as f:
+        f.write(tmp)
+    os.replace(tmp, path)
+
+
+def read_exr(path):
+    """``{name: (H, W) float32 array}`` of every channel of an EXR file."""
+    if not os.path.isfile(path):
+        raise ValueError(f"{path}: no such EXR file")
+    try:
+        with OpenEXR.File(str(path), separate_channels=True) as f:
+            return {name: np.array(ch.pixels, dtype=np.float32) for name, ch in f.channels().items()}
+    except Exception as e:  # OpenEXR raises bare exceptions for corrupt files
+        raise ValueError(f"{path}: cannot read EXR file ({e})") from None

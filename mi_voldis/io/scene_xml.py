@@ -1,0 +1,65 @@
+"""Write scenes that ``mi.load_file`` reads back (after ``import mi_voldis``): fields, integrator, sensors."""
+import os
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from .vol import write_vol
+
+
+def _matrix(m):
+    return " ".join(f"{v:.9g}" for v in np.asarray(m, dtype=np.float64).ravel())
+
+
+def _transform(name, m):
+    return f'<transform name="{name}"><matrix value="{_matrix(m)}"/></transform>'
+
+
+def save_field(directory, stem, density, color, to_world):
+    """Write ``<stem>_density.vol`` and ``<stem>_color.vol`` (raw grids, header bbox = the world box
+    when ``to_world`` is axis-aligned) and return the ``<medium>`` XML body for them."""
+    to_world = np.asarray(to_world, dtype=np.float64)
+    corners = np.array([[x, y, z, 1.0] for x in (0, 1) for y in (0, 1) for z in (0, 1)]) @ to_world.T
+    lo, hi = corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)
+    names = {}
+    for key, values in (("density", density), ("color", color)):
+        names[key] = f"{stem}_{key}.vol"
+        write_vol(os.path.join(directory, names[key]), values, lo, hi)
+    return (f'<string name="density" value={quoteattr(names["density"])}/>'
+            f'<string name="color" value={quoteattr(names["color"])}/>'
+            f'{_transform("to_world", to_world)}')
+
+
+def sensor_xml(to_world, fov_x, width, height, spp=1, principal=(0.0, 0.0)):
+    """A perspective sensor (Mitsuba camera frame: +x left, +y up, +z forward), box-filtered RGB film."""
+    return (f'<sensor type="perspective"><float name="fov" value="{fov_x:.9g}"/>'
+            f'<string name="fov_axis" value="x"/>'
+            f'<float name="principal_point_offset_x" value="{principal[0]:.9g}"/>'
+            f'<float name="principal_point_offset_y" value="{principal[1]:.9g}"/>'
+            f'<float name="near_clip" value="1e-4"/>'
+            f'{_transform("to_world", to_world)}'
+            f'<sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>'
+            f'<film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="{height}"/>'
+            f'<string name="pixel_format" value="rgb"/><rfilter type="box"/></film></sensor>')
+
+
+def write_scene(path, fields, options=None, sensors=(), transforms=None):
+    """Write a scene with a ``voldis`` integrator.
+
+    ``fields``: role -> ``<medium>`` body from :func:`save_field`; ``options``: integrator
+    properties (composition, mode, samples); ``transforms``: e.g. ``{"fg_to_world": matrix}``;
+    ``sensors``: XML strings from :func:`sensor_xml`."""
+    body = []
+    for key, value in (options or {}).items():
+        kind = "integer" if isinstance(value, int) else "string"
+        body.append(f'<{kind} name="{key}" value={quoteattr(str(value))}/>')
+    for key, m in (transforms or {}).items():
+        body.append(_transform(key, m))
+    for role, inner in fields.items():
+        body.append(f'<medium type="radiance_field" name="{role}" id="{role}">{inner}</medium>')
+    xml = ['<scene version="3.0.0">', '<integrator type="voldis" id="integrator">', *body, '</integrator>',
+           *sensors, '</scene>', '']
+    tmp = f"{path}.tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(xml))
+    os.replace(tmp, path)

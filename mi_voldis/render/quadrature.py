@@ -1,0 +1,34 @@
+"""Volume-rendering quadrature (the standard NeRF form that paper Eq. 1 means).
+
+For samples i with density sigma_i and interval length delta_i:
+
+    alpha_i = 1 - exp(-sigma_i delta_i)
+    T_i     = exp(-sum_{j<i} sigma_j delta_j)      (exclusive running sum, kept in log space)
+    w_i     = T_i alpha_i                            and  C = sum_i w_i c_i.
+
+Keeping the optical depth sum_{j<i} sigma_j delta_j instead of the product of transmittances avoids
+underflow chains, and alpha uses a cancellation-free 1 - exp(-x), so densities from 1e-6 to 1e8
+give alpha in [0, 1] with full relative precision.
+"""
+import drjit as dr
+
+from ..activations import one_minus_exp
+
+# Rays stop once every field's transmittance is below exp(-OPTICAL_DEPTH_CUTOFF) = 1e-5: what is left
+# can change a pixel by at most 1e-5.
+OPTICAL_DEPTH_CUTOFF = 11.5129
+
+
+def alpha(optical_depth):
+    """Opacity of one interval, alpha = 1 - exp(-sigma delta)."""
+    return one_minus_exp(optical_depth)
+
+
+def transmittance(optical_depth_before):
+    """T_i = exp(-sum_{j<i} sigma_j delta_j)."""
+    return dr.exp(-optical_depth_before)
+
+
+def weight(optical_depth_before, optical_depth):
+    """w_i = T_i alpha_i."""
+    return transmittance(optical_depth_before) * alpha(optical_depth)

@@ -1,0 +1,47 @@
+"""Render arbitrary ray batches through a ``voldis`` integrator, differentiably.
+
+``mi.render`` renders whole sensors; fitting and the tasks instead draw random rays across all views.
+:func:`render_rays` runs the same march (same sampler, quadrature and mixing) on given rays and is a
+Dr.Jit custom operation: ``dr.backward`` on any loss of its outputs runs the path-replay adjoint
+once and lands in the fields' ``density`` and ``color`` tensors.
+"""
+import drjit as dr
+import mitsuba as mi
+
+from . import layers as layer_io
+from . import march
+from .sampler import sample_interval
+
+
+class _RenderRays(dr.CustomOp):
+    def eval(self, tracked, plan, o, d, u, t_min, t_max):
+        # ``tracked``: the packed grids that need gradients, only there to link the op into the AD graph
+        self.plan, self.o, self.d, self.u = plan, o, d, u
+        self.t0, self.t1, _ = sample_interval(plan.boxes, o, d, t_min, t_max)
+        data = {id(f): dr.detach(f.packed) for f in plan.fields}
+        self.acc = march.primal(plan, data, o, d, self.t0, self.t1, self.u, True)
+        self.sums = layer_io.raw_sums(self.plan, self.acc)
+        dr.eval(self.acc)
+        return layer_io.finalize(self.sums)
+
+    def backward(self):
+        grad_out = self.grad_out()
+        raw = layer_io.finalize_adjoint(self.sums, {k: grad_out[k] for k in self.plan.layers})
+        grads = march.packed_gradients(self.plan, self.o, self.d, self.t0, self.t1, self.u, True, raw,
+                                       self.acc)
+        self.set_grad_in("tracked", tuple(grads[id(f)] for f in self.plan.fields if grads[id(f)] is not None))
+
+    def name(self):
+        return "voldis.render_rays"
+
+
+def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=0.0, t_max=dr.inf):
+    """Layers of the scene along rays ``o + t d`` (world space, ``d`` unit length).
+
+    ``u``: per-ray jitter in [0, 1) of the stratified samples; ``layers``: any of ``composite``,
+    ``full``, ``bg``, ``fg``, ``res``; ``samples``: per ray (default: the integrator's). Returns
+    ``{layer: (rgb, alpha, depth)}`` (premultiplied ``mi.Color3f``, ``mi.Float``, ``mi.Float``),
+    differentiable with respect to the fields' ``density`` and ``color`` tensors."""
+    plan = integrator.plan(tuple(layers), samples)
+    tracked = tuple(f.packed for f in plan.fields if dr.grad_enabled(f.packed))
+    return dr.custom(_RenderRays, tracked, plan, mi.Point3f(o), mi.Vector3f(d), mi.Float(u), t_min, t_max)
