@@ -7,7 +7,7 @@ import numpy as np
 
 from ..render import layers as layer_io
 from ..render import march, mixing
-from ..render.sampler import sample_interval
+from ..render.space import SceneSpace
 from ..transforms import is_identity, to_matrix
 
 __variant__ = mi.variant()
@@ -51,6 +51,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
      * - fg_to_world, bg_to_world
        - |transform|
        - Moves the foreground (background): its fields are evaluated at T^-1 p. (Default: identity)
+     * - ndc_to_world, ndc_near, ndc_scale_x, ndc_scale_y
+       - |transform|, |float|
+       - Forward-facing scenes: sample and store the fields in the NDC space of this reference camera
+         (Mitsuba frame), near plane and scales 2f/W, 2f/H; the fields' ``to_world`` then maps the unit
+         cube into NDC space. See :mod:`mi_voldis.render.space`. (Default: world space)
 
     Every ray is sampled at one set of distances t_i = t_0 + (i + u) dt over the union of the fields'
     boxes, with one jitter u per ray; the fields are evaluated at those points (foreground lookups at
@@ -93,6 +98,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         for name, m in (("fg_to_world", self.fg_to_world), ("bg_to_world", self.bg_to_world)):
             if abs(np.linalg.det(m[:3, :3])) < 1e-12:
                 raise ValueError(f"voldis: {name} must be invertible")
+        if "ndc_to_world" in props:
+            self.space = SceneSpace("ndc", to_matrix(props.get("ndc_to_world")), props.get("ndc_near", 1.0),
+                                    (props.get("ndc_scale_x", 1.0), props.get("ndc_scale_y", 1.0)))
+        else:
+            self.space = SceneSpace()
         self.fields = {}
         for name in props.keys():
             value = props.get(name)
@@ -134,9 +144,10 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         if key not in self._plans:
             lookups, sources = self._lookups()
             needed = mixing.needed_sources(sources, self.composition, layers)
-            boxes = tuple(lk.to_local for lk in lookups if lk.key != sources.fg_color)  # colour-only
+            boxes = tuple(lk.to_local for lk in lookups
+                          if lk.key != sources.fg_color and lk.warp is None)  # density-carrying boxes
             self._plans[key] = march.Plan(tuple(lk for lk in lookups if lk.key in needed), sources,
-                                          self.composition, layers, key[1], boxes)
+                                          self.composition, layers, key[1], boxes, self.space)
         return self._plans[key]
 
     def _lookups(self):
@@ -145,7 +156,10 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
 
         def lookup(key, role, inv_t):
             field = self.fields[role]
-            return march.Lookup(key, field, field.world_to_local @ inv_t, inv_t)
+            if self.space.is_world:
+                return march.Lookup(key, field, field.world_to_local @ inv_t, inv_t)
+            warp = None if is_identity(inv_t) else inv_t  # NDC: transform in world space between warps
+            return march.Lookup(key, field, field.world_to_local, inv_t, warp)
 
         full = lookup("full@p", "full", ident)
         bg = lookup("bg@p" if is_identity(self.bg_to_world) else "bg@b", "bg", inv_bg)
@@ -168,10 +182,9 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             self.render_forward(scene, None)
         plan = self.plan()
         u = sampler.next_1d(active)
-        o, d = mi.Point3f(dr.detach(ray.o)), mi.Vector3f(dr.detach(ray.d))
-        t0, t1, hit = sample_interval(plan.boxes, o, d, 0.0, ray.maxt)
+        rays = march.prepare_rays(plan, mi.Point3f(dr.detach(ray.o)), mi.Vector3f(dr.detach(ray.d)), 0.0, ray.maxt)
         if mode == dr.ADMode.Primal:
-            acc = march.primal(plan, {id(f): f.packed for f in plan.fields}, o, d, t0, t1, u, active)
+            acc = march.primal(plan, {id(f): f.packed for f in plan.fields}, rays, u, active)
             out = layer_io.finalize(layer_io.raw_sums(plan, acc))
             main = out[self.mode]
             L = main[0] + out["res"][0] if "res" in out else main[0]
@@ -179,11 +192,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             for layer in self.exr_layers:
                 rgb, a, z = out[layer]
                 aovs += [rgb[0], rgb[1], rgb[2], a, z]
-            return L, hit, aovs, acc
+            return L, rays.hit, aovs, acc
         grads = self._layer_grads(δL, δaovs)
         raw = layer_io.finalize_adjoint(layer_io.raw_sums(plan, state_in), grads)
-        backpropagate(plan, o, d, t0, t1, u, active, raw, state_in)
-        return δL, hit, [], None
+        backpropagate(plan, rays, u, active, raw, state_in)
+        return δL, rays.hit, [], None
 
     def render_forward(self, scene, params, sensor=0, seed=0, spp=0):
         raise NotImplementedError("voldis: forward-mode differentiation is not supported; use reverse "
@@ -248,9 +261,9 @@ def film_adjoint(film, pos, weight, n_aovs, grad_in):
     return grads
 
 
-def backpropagate(plan, o, d, t0, t1, u, active, raw_grads, acc):
+def backpropagate(plan, rays, u, active, raw_grads, acc):
     """Adjoint march, then one AD traversal carrying its gradients to ``density``/``color``."""
-    grads = march.packed_gradients(plan, o, d, t0, t1, u, active, raw_grads, acc)
+    grads = march.packed_gradients(plan, rays, u, active, raw_grads, acc)
     with dr.resume_grad():
         for f in plan.fields:
             if grads[id(f)] is not None:

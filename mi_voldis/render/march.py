@@ -22,17 +22,34 @@ import numpy as np
 
 from ..transforms import apply_point, apply_vector
 from . import mixing, quadrature
+from .sampler import sample_interval
 
 COMPONENTS = 5  # per (chain, layer) sum: premultiplied R, G, B, alpha, depth numerator
 
 
 @dataclass(frozen=True)
 class Lookup:
-    """One evaluation of a field per sample: at ``to_local`` * p, seen along ``to_frame`` * d."""
+    """One evaluation of a field per sample, at ``to_local`` * p (p in scene space), seen along
+    ``to_frame`` * d (d the world direction). ``warp``: a world-space matrix applied to the world
+    point before ``to_local`` when the scene space is not world space (where it is folded into
+    ``to_local``)."""
     key: str
     field: object
     to_local: np.ndarray
     to_frame: np.ndarray
+    warp: np.ndarray | None = None
+
+
+@dataclass
+class Rays:
+    """World rays (o, d), their scene-space form (o_s, d_s) and the sampled range [t0, t1] of t'."""
+    o: object
+    d: object
+    o_s: object
+    d_s: object
+    t0: object
+    t1: object
+    hit: object
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,6 +62,7 @@ class Plan:
     layers: tuple
     samples: int
     boxes: tuple
+    space: object
 
     def __post_init__(self):
         # Chains and terms depend only on the rule and layers: find them once with placeholder values.
@@ -66,11 +84,30 @@ def _term_name(chain, layer):
     return f"{chain}|{layer}"
 
 
+def prepare_rays(plan, o, d, t_min=0.0, t_max=dr.inf):
+    """Scene-space rays and their sampled interval: the union of the plan's boxes, clipped to
+    [t_min, t_max] in world space (to [0, 1) of t' in NDC space)."""
+    o_s, d_s, t_limit = plan.space.ray(o, d)
+    if plan.space.is_world:
+        t0, t1, hit = sample_interval(plan.boxes, o_s, d_s, t_min, t_max)
+    else:
+        t0, t1, hit = sample_interval(plan.boxes, o_s, d_s, 0.0, t_limit)
+    return Rays(o, d, o_s, d_s, t0, t1, hit)
+
+
+def _distance(plan, rays, t, p):
+    """World distance along the ray of the scene-space point ``p`` = o' + t d'."""
+    if plan.space.is_world:
+        return t
+    return dr.dot(plan.space.to_world(p) - rays.o, rays.d)
+
+
 def _sample(plan, data, p, d, active):
-    """Chains' densities and the terms at world points ``p`` (see :func:`mixing.compose`)."""
+    """Chains' densities and the terms at scene-space points ``p`` seen along world directions ``d``."""
     values = {}
     for lk in plan.lookups:
-        pl = apply_point(lk.to_local, p)
+        q = p if lk.warp is None else plan.space.from_world(apply_point(lk.warp, plan.space.to_world(p)))
+        pl = apply_point(lk.to_local, q)
         inside = active & dr.all((pl >= 0.0) & (pl <= 1.0))
         sigma, color = lk.field.eval_local(pl, apply_vector(lk.to_frame, d), data[id(lk.field)], inside)
         values[lk.key] = (sigma, color, inside)
@@ -85,23 +122,26 @@ def _continue(i, depth, n):
     return (i < n) & (lowest < quadrature.OPTICAL_DEPTH_CUTOFF)
 
 
-def primal(plan, data, o, d, t0, t1, u, active):
+def primal(plan, data, rays, u, active):
     """Primal march. Returns {"chain|layer": [R, G, B, alpha, depth-numerator]} (Float arrays).
 
-    ``data``: id(field) -> packed grid; ``o, d``: world rays; ``[t0, t1]``: sampled interval;
-    ``u``: per-ray jitter in [0, 1)."""
+    ``data``: id(field) -> packed grid; ``rays``: from :func:`prepare_rays`; ``u``: per-ray jitter
+    in [0, 1) of the stratified samples t_i = t0 + (i + u) dt."""
     n = plan.samples
-    dt = (t1 - t0) * (1.0 / n)
-    zero = dr.zeros(mi.Float, dr.width(t0))
+    dt = (rays.t1 - rays.t0) * (1.0 / n)
+    delta = dt * dr.norm(rays.d_s)
+    zero = dr.zeros(mi.Float, dr.width(rays.t0))
     depth = {c: mi.Float(zero) for c in plan.chains}
     acc = {_term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms}
     i = mi.UInt32(0)
-    active = mi.Bool(active) & (t1 > t0)
+    active = mi.Bool(active) & rays.hit
 
     def body(i, active, depth, acc):
-        t = t0 + (mi.Float(i) + u) * dt
-        sig, terms = _sample(plan, data, o + t * d, d, active)
-        x = {c: sig[c] * dt for c in plan.chains}
+        t = rays.t0 + (mi.Float(i) + u) * dt
+        p = rays.o_s + t * rays.d_s
+        sig, terms = _sample(plan, data, p, rays.d, active)
+        t = _distance(plan, rays, t, p)
+        x = {c: sig[c] * delta for c in plan.chains}
         w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
         for (chain, layer), (g, k) in terms.items():
             a = acc[_term_name(chain, layer)]
@@ -117,14 +157,15 @@ def primal(plan, data, o, d, t0, t1, u, active):
     return acc
 
 
-def adjoint(plan, data, o, d, t0, t1, u, active, grads, acc):
+def adjoint(plan, data, rays, u, active, grads, acc):
     """Path-replay adjoint: accumulates gradients into the (gradient-tracked) arrays of ``data``.
 
     ``grads``: layer -> (dRGB Color3f, d_alpha, d_depth_numerator), the adjoint of each layer's raw
     sums; ``acc``: the primal's per-term sums for the same rays and jitter."""
     n = plan.samples
-    dt = (t1 - t0) * (1.0 / n)
-    zero = dr.zeros(mi.Float, dr.width(t0))
+    dt = (rays.t1 - rays.t0) * (1.0 / n)
+    delta = dt * dr.norm(rays.d_s)
+    zero = dr.zeros(mi.Float, dr.width(rays.t0))
     depth = {c: mi.Float(zero) for c in plan.chains}
     rho = {c: mi.Float(zero) for c in plan.chains}
     for chain, layer in plan.terms:
@@ -132,13 +173,15 @@ def adjoint(plan, data, o, d, t0, t1, u, active, grads, acc):
         a = acc[_term_name(chain, layer)]
         rho[chain] += g_rgb[0] * a[0] + g_rgb[1] * a[1] + g_rgb[2] * a[2] + g_a * a[3] + g_d * a[4]
     i = mi.UInt32(0)
-    active = mi.Bool(active) & (t1 > t0)
+    active = mi.Bool(active) & rays.hit
 
     def body(i, active, depth, rho):
-        t = t0 + (mi.Float(i) + u) * dt
+        t = rays.t0 + (mi.Float(i) + u) * dt
+        p = rays.o_s + t * rays.d_s
         with dr.resume_grad():
-            sig, terms = _sample(plan, data, o + t * d, d, active)
-            x = {c: sig[c] * dt for c in plan.chains}
+            sig, terms = _sample(plan, data, p, rays.d, active)
+            t = _distance(plan, rays, t, p)
+            x = {c: sig[c] * delta for c in plan.chains}
             w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
             value = {c: mi.Float(0.0) for c in plan.chains}
             for (chain, layer), (g, k) in terms.items():
@@ -156,7 +199,7 @@ def adjoint(plan, data, o, d, t0, t1, u, active, grads, acc):
     dr.while_loop((i, active, depth, rho), lambda i, a, *_: a, body, label="voldis adjoint")
 
 
-def packed_gradients(plan, o, d, t0, t1, u, active, grads, acc):
+def packed_gradients(plan, rays, u, active, grads, acc):
     """Gradients of the fields' packed grids, ``{id(field): array or None}``, from the adjoint march.
 
     The march writes into detached, gradient-tracked copies of the packed grids (of the fields whose
@@ -174,5 +217,5 @@ def packed_gradients(plan, o, d, t0, t1, u, active, grads, acc):
         largest = max(dr.width(leaf) for leaf in leaves.values())
         if dr.expand_threshold() <= largest:
             dr.set_expand_threshold(largest + 1)
-        adjoint(plan, leaves, o, d, t0, t1, u, active, grads, acc)
+        adjoint(plan, leaves, rays, u, active, grads, acc)
         return {k: dr.grad(v) if dr.grad_enabled(v) else None for k, v in leaves.items()}

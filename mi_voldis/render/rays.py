@@ -10,16 +10,15 @@ import mitsuba as mi
 
 from . import layers as layer_io
 from . import march
-from .sampler import sample_interval
 
 
 class _RenderRays(dr.CustomOp):
     def eval(self, tracked, plan, o, d, u, t_min, t_max):
         # ``tracked``: the packed grids that need gradients, only there to link the op into the AD graph
-        self.plan, self.o, self.d, self.u = plan, o, d, u
-        self.t0, self.t1, _ = sample_interval(plan.boxes, o, d, t_min, t_max)
+        self.plan, self.u = plan, u
+        self.rays = march.prepare_rays(plan, o, d, t_min, t_max)
         data = {id(f): dr.detach(f.packed) for f in plan.fields}
-        self.acc = march.primal(plan, data, o, d, self.t0, self.t1, self.u, True)
+        self.acc = march.primal(plan, data, self.rays, u, True)
         self.sums = layer_io.raw_sums(self.plan, self.acc)
         dr.eval(self.acc)
         return layer_io.finalize(self.sums)
@@ -27,8 +26,7 @@ class _RenderRays(dr.CustomOp):
     def backward(self):
         grad_out = self.grad_out()
         raw = layer_io.finalize_adjoint(self.sums, {k: grad_out[k] for k in self.plan.layers})
-        grads = march.packed_gradients(self.plan, self.o, self.d, self.t0, self.t1, self.u, True, raw,
-                                       self.acc)
+        grads = march.packed_gradients(self.plan, self.rays, self.u, True, raw, self.acc)
         self.set_grad_in("tracked", tuple(grads[id(f)] for f in self.plan.fields if grads[id(f)] is not None))
 
     def name(self):
@@ -38,7 +36,8 @@ class _RenderRays(dr.CustomOp):
 def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=0.0, t_max=dr.inf):
     """Layers of the scene along rays ``o + t d`` (world space, ``d`` unit length).
 
-    ``u``: per-ray jitter in [0, 1) of the stratified samples; ``layers``: any of ``composite``,
+    ``u``: per-ray jitter in [0, 1) of the stratified samples; ``t_min``, ``t_max``: world-space
+    limits (world-space scenes); ``layers``: any of ``composite``,
     ``full``, ``bg``, ``fg``, ``res``; ``samples``: per ray (default: the integrator's). Returns
     ``{layer: (rgb, alpha, depth)}`` (premultiplied ``mi.Color3f``, ``mi.Float``, ``mi.Float``),
     differentiable with respect to the fields' ``density`` and ``color`` tensors."""

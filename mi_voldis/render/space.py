@@ -1,0 +1,94 @@
+"""Scene space: where rays are sampled and fields live, world space or NDC for forward-facing scenes.
+
+*World* space is the identity. *NDC* follows NeRF's forward-facing set-up: with a reference camera
+(Mitsuba frame, +z forward), near plane n and scales (s_x, s_y) = (2 f / W, 2 f / H), a camera-frame
+point (x, y, z) maps to
+
+    (x', y', z') = (s_x x / z, s_y y / z, 1 - 2 n / z),
+
+which sends the frustum from the near plane to infinity into z' in [-1, 1) and keeps straight lines
+straight. A ray, first moved to start on the near plane, becomes o' + t' d' with t' in [0, 1) for
+z in [n, inf): samples uniform in t' are uniform in disparity. Quadrature then uses NDC lengths
+(delta = dt' |d'|, as NeRF does), so densities are per NDC unit; depths are reported in world units.
+Every field is evaluated at the same scene-space points, so the warp keeps samples aligned.
+"""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..transforms import apply_point, apply_vector
+
+NDC_T_MAX = 1.0 - 1e-6  # t' = 1 is at infinity
+
+
+class SceneSpace:
+    """``kind`` 'world' (identity) or 'ndc' (``to_world``: reference camera frame -> world)."""
+
+    def __init__(self, kind="world", to_world=None, near=None, scale=None):
+        if kind not in ("world", "ndc"):
+            raise ValueError(f"scene space must be 'world' or 'ndc', got '{kind}'")
+        self.kind = kind
+        if kind == "ndc":
+            if to_world is None or near is None or scale is None:
+                raise ValueError("NDC space needs a reference frame, a near plane and two scales")
+            if near <= 0 or min(scale) <= 0:
+                raise ValueError(f"NDC space needs near > 0 and positive scales, got {near}, {scale}")
+            self.to_world_m = np.asarray(to_world, np.float64)
+            self.from_world_m = np.linalg.inv(self.to_world_m)
+            self.near = float(near)
+            self.scale = (float(scale[0]), float(scale[1]))
+
+    @property
+    def is_world(self):
+        return self.kind == "world"
+
+    def ray(self, o, d):
+        """Scene-space ray (o', d') and the valid parameter range [0, t'_max] of a world ray."""
+        if self.is_world:
+            return o, d, dr.inf
+        oc, dc = apply_point(self.from_world_m, o), apply_vector(self.from_world_m, d)
+        oc = oc + dc * ((self.near - oc.z) / dc.z)  # start on the near plane, as NeRF does
+        sx, sy = self.scale
+        ox, oy = oc.x / oc.z, oc.y / oc.z
+        o_ndc = mi.Point3f(sx * ox, sy * oy, 1.0 - 2.0 * self.near / oc.z)
+        d_ndc = mi.Vector3f(sx * (dc.x / dc.z - ox), sy * (dc.y / dc.z - oy), 2.0 * self.near / oc.z)
+        forward = dc.z > 0
+        return (dr.select(forward, o_ndc, 0.0), dr.select(forward, d_ndc, 0.0),
+                dr.select(forward, NDC_T_MAX, 0.0))
+
+    def to_world(self, p):
+        if self.is_world:
+            return p
+        z = 2.0 * self.near / (1.0 - p.z)
+        return apply_point(self.to_world_m, mi.Point3f(p.x * z / self.scale[0], p.y * z / self.scale[1], z))
+
+    def from_world(self, p):
+        if self.is_world:
+            return p
+        pc = apply_point(self.from_world_m, p)
+        return mi.Point3f(self.scale[0] * pc.x / pc.z, self.scale[1] * pc.y / pc.z, 1.0 - 2.0 * self.near / pc.z)
+
+    # ----------------------------------------------------------------- NumPy versions (set-up)
+    def from_world_np(self, p):
+        """NumPy (n, 3) version of :meth:`from_world`."""
+        p = np.asarray(p, np.float64)
+        if self.is_world:
+            return p
+        pc = p @ self.from_world_m[:3, :3].T + self.from_world_m[:3, 3]
+        z = pc[:, 2]
+        return np.stack([self.scale[0] * pc[:, 0] / z, self.scale[1] * pc[:, 1] / z, 1 - 2 * self.near / z], -1)
+
+    def to_world_np(self, p):
+        p = np.asarray(p, np.float64)
+        if self.is_world:
+            return p
+        z = 2 * self.near / (1 - p[:, 2])
+        pc = np.stack([p[:, 0] * z / self.scale[0], p[:, 1] * z / self.scale[1], z], -1)
+        return pc @ self.to_world_m[:3, :3].T + self.to_world_m[:3, 3]
+
+    def properties(self):
+        """Integrator properties describing this space (empty for world space)."""
+        if self.is_world:
+            return {}
+        return {"ndc_to_world": self.to_world_m, "ndc_near": self.near,
+                "ndc_scale_x": self.scale[0], "ndc_scale_y": self.scale[1]}

@@ -1,0 +1,1 @@
+"""Synthetic datasets with ground truth, rendered from Mitsuba XML scenes (scripts/make_dataset.py)."""

@@ -1,0 +1,149 @@
+"""Render a dataset with ground truth from a Mitsuba XML scene and its rig description (NAME.json).
+
+Per view: the image (Mitsuba's path tracer), the object's exact visible coverage (everything black,
+the object emitting 1, direct visibility only, box filter) and the binary mask from it (coverage >
+0.5), the ground-truth background (object removed, with its shadow and reflections), and on test
+views the ground truth with the object moved by the rig's stated transform. Writes transforms.json
+(keys of :mod:`mi_voldis.data.transforms_json`) and, for forward-facing rigs, poses_bounds.npy.
+Deterministic for a seed.
+"""
+import json
+import os
+import shutil
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+from tqdm import tqdm
+
+from ..data.cameras import mitsuba_to_opengl
+from ..data.llff import write_llff
+from ..io.images import to_uint8, write_png
+from ..transforms import compose
+from . import rigs, variants
+
+PASSES = ("image", "coverage", "background", "moved")
+
+
+def load_rig(scene_path):
+    path = os.path.splitext(scene_path)[0] + ".json"
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, json.JSONDecodeError) as e:
+        raise ValueError(f"{path}: cannot read the scene's rig description ({e})") from None
+
+
+def make_cameras(rig, views, width, height):
+    cam = rig["cameras"]
+    if cam["type"] == "orbit":
+        return rigs.orbit(views, cam["target"], cam["radius"], cam["elevation_deg"], cam["fov_deg"], width, height)
+    if cam["type"] == "forward":
+        return rigs.forward_grid(views, cam["centre"], cam["target"], cam["spread"], cam["fov_deg"], width, height)
+    raise ValueError(f"unknown camera rig type '{cam['type']}' (orbit or forward)")
+
+
+def _sensor(width, height, spp):
+    return (f'<sensor type="perspective" id="sensor"><float name="fov" value="40"/><string name="fov_axis" value="x"/>'
+            f'<float name="near_clip" value="1e-3"/>'
+            f'<sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>'
+            f'<film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="{height}"/>'
+            f'<string name="pixel_format" value="rgb"/><rfilter type="box"/></film></sensor>')
+
+
+class _Renderer:
+    """One loaded scene variant whose sensor is moved from view to view (kernels are reused)."""
+
+    def __init__(self, root, width, height, spp):
+        xml = variants.to_string(root).replace("</scene>", _sensor(width, height, spp) + "</scene>")
+        self.scene = mi.load_string(xml)
+        self.params = mi.traverse(self.scene)
+
+    def render(self, camera, seed):
+        self.params["sensor.to_world"] = mi.ScalarTransform4f(np.asarray(camera.to_world, np.float32))
+        self.params["sensor.x_fov"] = float(camera.fov_x)
+        self.params.update()
+        with dr.suspend_grad():
+            return np.array(mi.render(self.scene, seed=seed), dtype=np.float32)[..., :3]
+
+
+def object_centre(root, prefix):
+    scene = mi.load_string(variants.to_string(root))
+    boxes = [s.bbox() for s in scene.shapes() if s.id().startswith(prefix)]
+    lo = np.min([np.array(b.min) for b in boxes], axis=0)
+    hi = np.max([np.array(b.max) for b in boxes], axis=0)
+    return 0.5 * (lo + hi)
+
+
+def depth_bounds(root, cameras, width, height):
+    """Per-view (near, far) depth bounds from rendered distances (1st and 99.9th percentiles)."""
+    renderer = _Renderer(variants.with_integrator(root, "depth"), width, height, 4)
+    bounds = []
+    for k, cam in enumerate(cameras):
+        z = renderer.render(cam, k)[..., 0]
+        z = z[np.isfinite(z) & (z > 0)]
+        bounds.append((np.percentile(z, 1.0), np.percentile(z, 99.9)))
+    return np.array(bounds)
+
+
+def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0, holdout=8, progress=True):
+    """Render the dataset of ``scene_path`` into ``out`` (see the module docstring); returns ``out``."""
+    rig = load_rig(scene_path)
+    root = variants.parse(scene_path)
+    prefix = rig.get("object_prefix", "object")
+    variants.check_object(root, prefix, scene_path)
+    views = views or rig["views"]
+    width, height = resolution or rig["resolution"]
+    spp = spp or rig["spp"]
+    mi.file_resolver().prepend(os.path.dirname(os.path.abspath(scene_path)))
+
+    cameras = make_cameras(rig, views, width, height)
+    split = ["test" if holdout and k % holdout == 0 else "train" for k in range(views)]
+    mv = rig["moved"]
+    moved_matrix = compose(mv.get("scale", 1.0), tuple(mv["rotate"]) if "rotate" in mv else None,
+                           mv.get("translate", (0, 0, 0)), object_centre(root, prefix))
+    scenes = {"image": root, "coverage": variants.coverage_only(root, prefix),
+              "background": variants.without_object(root, prefix),
+              "moved": variants.moved(root, prefix, moved_matrix)}
+
+    tmp = out.rstrip("/") + ".partial"
+    shutil.rmtree(tmp, ignore_errors=True)
+    for folder in ("images", "masks", "coverage", "backgrounds", "moved"):
+        os.makedirs(os.path.join(tmp, folder))
+    names = [f"view_{k:03d}.png" for k in range(views)]
+    for p, kind in enumerate(PASSES):
+        renderer = _Renderer(scenes[kind], width, height, spp)
+        todo = [k for k in range(views) if kind != "moved" or split[k] == "test"]
+        for k in tqdm(todo, desc=f"{os.path.basename(scene_path)}: {kind}", disable=not progress, leave=False):
+            img = renderer.render(cameras[k], seed * 1_000_003 + p * views + k)
+            if kind == "coverage":
+                cov = np.round(np.clip(img.mean(axis=2), 0.0, 1.0) * 65535).astype(np.uint16)
+                write_png(os.path.join(tmp, "coverage", names[k]), cov)
+                write_png(os.path.join(tmp, "masks", names[k]), np.where(cov > 65535 / 2, 255, 0).astype(np.uint8))
+            else:
+                folder = {"image": "images", "background": "backgrounds", "moved": "moved"}[kind]
+                write_png(os.path.join(tmp, folder, names[k]), to_uint8(img))
+
+    frames = []
+    for k, (cam, name) in enumerate(zip(cameras, names)):
+        frame = {"file_path": f"images/{name}", "transform_matrix": mitsuba_to_opengl(cam.to_world).tolist(),
+                 "split": split[k], "object_mask_path": f"masks/{name}", "coverage_path": f"coverage/{name}",
+                 "background_path": f"backgrounds/{name}"}
+        if split[k] == "test":
+            frame["moved_path"] = f"moved/{name}"
+        frames.append(frame)
+    meta = {"camera_angle_x": float(np.radians(cameras[0].fov_x)), "w": width, "h": height,
+            "scene": os.path.basename(scene_path), "seed": seed, "spp": spp,
+            "moved_transform": moved_matrix.tolist(), "frames": frames}
+    if rig["cameras"]["type"] == "forward":
+        bounds = depth_bounds(scenes["image"], cameras, width, height)
+        write_llff(tmp, cameras, bounds)
+        meta.update(forward_facing=True, near=float(bounds[:, 0].min()), far=float(bounds[:, 1].max()))
+    else:
+        meta.update(forward_facing=False, aabb=rig["aabb"])
+    with open(os.path.join(tmp, "transforms.json"), "w") as f:
+        json.dump(meta, f, indent=1)
+    if os.path.exists(out):
+        shutil.rmtree(out)
+    os.replace(tmp, out)
+    return out

@@ -1,0 +1,49 @@
+"""Camera rigs for synthetic datasets: an orbit (360 degrees) and a forward-facing grid (LLFF-like)."""
+import numpy as np
+
+from ..data.types import Camera
+
+
+def look_at(origin, target, up=(0.0, 1.0, 0.0)):
+    """Mitsuba-frame camera-to-world matrix (+x left, +y up, +z forward) looking from origin at target."""
+    origin, target, up = (np.asarray(v, np.float64) for v in (origin, target, up))
+    forward = target - origin
+    forward /= np.linalg.norm(forward)
+    left = np.cross(up, forward)
+    left /= np.linalg.norm(left)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, np.cross(forward, left), forward, origin
+    return m
+
+
+def orbit(views, target, radius, elevation_deg, fov_deg, width, height):
+    """``views`` cameras on a sphere around ``target``: azimuth in even steps (golden-angle offset),
+    elevation alternating through the given [low, high] range."""
+    target = np.asarray(target, np.float64)
+    lo, hi = elevation_deg
+    cams = []
+    for k in range(views):
+        az = 2 * np.pi * k / views
+        el = np.radians(lo + (hi - lo) * ((k * 0.618034) % 1.0))
+        pos = target + radius * np.array([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)])
+        cams.append(Camera(look_at(pos, target), fov_deg, width, height))
+    return cams
+
+
+def forward_grid(views, centre, target, spread, fov_deg, width, height):
+    """``views`` cameras on a jittered grid in the plane through ``centre`` facing ``target``, spread
+    over ``spread`` = (width, height) in world units, all looking parallel to centre -> target."""
+    centre, target = np.asarray(centre, np.float64), np.asarray(target, np.float64)
+    base = look_at(centre, target)
+    cols = int(np.ceil(np.sqrt(views * spread[0] / spread[1])))
+    rows = int(np.ceil(views / cols))
+    rng = np.random.default_rng(0)
+    cams = []
+    for k in range(views):
+        r, c = divmod(k, cols)
+        x = ((c + 0.5) / cols - 0.5) * spread[0] + rng.uniform(-0.1, 0.1) * spread[0] / cols
+        y = ((r + 0.5) / rows - 0.5) * spread[1] + rng.uniform(-0.1, 0.1) * spread[1] / rows
+        m = base.copy()
+        m[:3, 3] = centre + x * base[:3, 0] + y * base[:3, 1]
+        cams.append(Camera(m, fov_deg, width, height))
+    return cams
