@@ -13,13 +13,13 @@ def box_transform(lo, hi):
     return m
 
 
-def field_dict(density, color, to_world=None):
+def field_dict(density, color, to_world=None, density_scale=1.0):
     """Plugin dict of a field with raw grids ``density`` (Z, Y, X[, 1]) and ``color`` (Z, Y, X, C)."""
     density = np.asarray(density, np.float32)
     if density.ndim == 3:
         density = density[..., None]
     out = {"type": "radiance_field", "density": mi.TensorXf(density),
-           "color": mi.TensorXf(np.asarray(color, np.float32))}
+           "color": mi.TensorXf(np.asarray(color, np.float32)), "density_scale": float(density_scale)}
     if to_world is not None:
         out["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, np.float32))
     return out

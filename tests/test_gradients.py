@@ -17,7 +17,8 @@ def weighted_loss(integ, layers, seed=0, samples=None):
     def loss():
         out = render_rays(integ, o, d, u, layers=layers, samples=samples)
         total = mi.Float(0.0)
-        for lay, (rgb, a, z) in out.items():
+        for lay in layers:
+            rgb, a, z = out[lay]
             total += dr.sum(rgb[0] * w[lay][0] + rgb[1] * w[lay][1] + rgb[2] * w[lay][2] + a * w[lay][3]
                             + (z * w[lay][4] * 0.1 if lay != "fg" else 0.0))
         return total

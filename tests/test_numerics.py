@@ -30,7 +30,8 @@ def run_and_check(integ, keys=("full.density", "full.color", "bg.density", "bg.c
     o, d, u = hard_rays()
     out = render_rays(integ, o, d, u, layers=ALL)
     loss = mi.Float(0.0)
-    for rgb, a, z in out.values():
+    for layer in ALL:
+        rgb, a, z = out[layer]
         loss += dr.sum(rgb[0] + rgb[1] + rgb[2] + a + z)
     dr.backward(loss)
     res = numpy_layers(out)

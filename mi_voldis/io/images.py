@@ -1,4 +1,10 @@
-"""8-bit previews: linear premultiplied RGB(A) -> sRGB PNG, and contact sheets."""
+"""8-bit images and colour encodings.
+
+Radiance fields here hold *display-encoded* (sRGB) colour, as the photographs they are fitted to and
+as NeRF does: their renders are quantised to PNG as they are (:func:`display_to_uint8`). Mitsuba's
+path tracer renders *linear* light, encoded with the sRGB curve for PNG (:func:`linear_to_uint8`).
+EXR layers are written in linear light (:func:`display_to_linear_premultiplied`), as compositing
+tools expect."""
 import os
 
 import imageio.v3 as iio
@@ -16,9 +22,24 @@ def srgb_to_linear(x):
     return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
 
 
-def to_uint8(rgb):
-    """(H, W, 3) linear RGB -> (H, W, 3) sRGB uint8."""
+def linear_to_uint8(rgb):
+    """(H, W, 3) linear RGB -> sRGB-encoded uint8."""
     return np.round(linear_to_srgb(rgb) * 255.0).astype(np.uint8)
+
+
+def display_to_uint8(rgb):
+    """(H, W, 3) display-encoded RGB in [0, 1] -> uint8 (no transfer curve)."""
+    return np.round(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def display_to_linear_premultiplied(rgb, alpha, eps=1e-4):
+    """Premultiplied display-encoded colour -> premultiplied linear colour: the sRGB curve is undone on
+    the unpremultiplied colour c = rgb / alpha (sign-symmetric, as foreground layers can be negative);
+    0 where |alpha| < eps."""
+    alpha = np.asarray(alpha, np.float64)[..., None]
+    ok = np.abs(alpha) > eps
+    c = np.where(ok, np.asarray(rgb, np.float64) / np.where(ok, alpha, 1.0), 0.0)
+    return (np.sign(c) * srgb_to_linear(np.abs(c)) * alpha).astype(np.float32)
 
 
 def depth_to_uint8(z, alpha=None):

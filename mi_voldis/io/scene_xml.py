@@ -15,7 +15,7 @@ def _transform(name, m):
     return f'<transform name="{name}"><matrix value="{_matrix(m)}"/></transform>'
 
 
-def save_field(directory, stem, density, color, to_world):
+def save_field(directory, stem, density, color, to_world, density_scale=1.0):
     """Write ``<stem>_density.vol`` and ``<stem>_color.vol`` (raw grids, header bbox = the world box
     when ``to_world`` is axis-aligned) and return the ``<medium>`` XML body for them."""
     to_world = np.asarray(to_world, dtype=np.float64)
@@ -27,6 +27,7 @@ def save_field(directory, stem, density, color, to_world):
         write_vol(os.path.join(directory, names[key]), values, lo, hi)
     return (f'<string name="density" value={quoteattr(names["density"])}/>'
             f'<string name="color" value={quoteattr(names["color"])}/>'
+            f'<float name="density_scale" value="{density_scale:.9g}"/>'
             f'{_transform("to_world", to_world)}')
 
 
@@ -51,8 +52,10 @@ def write_scene(path, fields, options=None, sensors=(), transforms=None):
     ``sensors``: XML strings from :func:`sensor_xml`."""
     body = []
     for key, value in (options or {}).items():
-        kind = "integer" if isinstance(value, int) else "string"
-        body.append(f'<{kind} name="{key}" value={quoteattr(str(value))}/>')
+        kind = "boolean" if isinstance(value, bool) else "integer" if isinstance(value, int) else \
+            "float" if isinstance(value, float) else "string"
+        text = str(value).lower() if isinstance(value, bool) else f"{value:.9g}" if kind == "float" else str(value)
+        body.append(f'<{kind} name="{key}" value={quoteattr(text)}/>')
     for key, m in (transforms or {}).items():
         body.append(_transform(key, m))
     for role, inner in fields.items():

@@ -7,6 +7,7 @@ import numpy as np
 
 from ..render import layers as layer_io
 from ..render import march, mixing
+from ..render.occupancy import Occupancy, local_to_scene
 from ..render.space import SceneSpace
 from ..transforms import is_identity, to_matrix
 
@@ -51,6 +52,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
      * - fg_to_world, bg_to_world
        - |transform|
        - Moves the foreground (background): its fields are evaluated at T^-1 p. (Default: identity)
+     * - occupancy_resolution, occupancy_threshold
+       - |int|, |float|
+       - Skip samples in cells of an occupancy grid (this many cells along the longest side of the
+         fields' bounding box) where no field's density exceeds the threshold (per unit length of
+         scene space). 0 disables skipping. (Default: 0, 0.01)
      * - ndc_to_world, ndc_near, ndc_scale_x, ndc_scale_y
        - |transform|, |float|
        - Forward-facing scenes: sample and store the fields in the NDC space of this reference camera
@@ -116,6 +122,35 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             if role not in self.fields:
                 raise ValueError(f"voldis: a '{role}' radiance_field medium is required")
         self._plans = {}
+        self.occupancy = None
+        self.occupancy_threshold = float(props.get("occupancy_threshold", 0.01))
+        resolution = int(props.get("occupancy_resolution", 0))
+        if resolution < 0:
+            raise ValueError(f"voldis: occupancy_resolution must be >= 0, got {resolution}")
+        if resolution:
+            self.update_occupancy(resolution)
+
+    def update_occupancy(self, resolution, threshold=None, extra=None):
+        """Rebuild the occupancy grid from the fields' current densities (``resolution`` 0: off).
+        ``extra``: scene-space points to mark occupied regardless (see :class:`Occupancy`)."""
+        self.occupancy = None
+        self._plans.clear()
+        if resolution:
+            lookups, sources = self._lookups()
+            dense = [lk for lk in lookups if lk.key != sources.fg_color]
+            lo, hi = self.scene_bounds()
+            self.occupancy = Occupancy.build(dense, self.space, resolution,
+                                             threshold or self.occupancy_threshold, lo, hi, extra)
+            self._plans.clear()
+        return self.occupancy
+
+    def scene_bounds(self):
+        """Scene-space axis-aligned bounds of every density-carrying box (after transforms)."""
+        lookups, sources = self._lookups()
+        corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], np.float64)
+        pts = [local_to_scene(lk, self.space, corners) for lk in lookups if lk.key != sources.fg_color]
+        pts = np.concatenate(pts)
+        return pts.min(axis=0), pts.max(axis=0)
 
     # ---------------------------------------------------------------- Mitsuba object protocol
     def traverse(self, callback):
@@ -147,7 +182,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             boxes = tuple(lk.to_local for lk in lookups
                           if lk.key != sources.fg_color and lk.warp is None)  # density-carrying boxes
             self._plans[key] = march.Plan(tuple(lk for lk in lookups if lk.key in needed), sources,
-                                          self.composition, layers, key[1], boxes, self.space)
+                                          self.composition, layers, key[1], boxes, self.space, self.occupancy)
         return self._plans[key]
 
     def _lookups(self):
@@ -184,7 +219,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         u = sampler.next_1d(active)
         rays = march.prepare_rays(plan, mi.Point3f(dr.detach(ray.o)), mi.Vector3f(dr.detach(ray.d)), 0.0, ray.maxt)
         if mode == dr.ADMode.Primal:
-            acc = march.primal(plan, {id(f): f.packed for f in plan.fields}, rays, u, active)
+            acc, _ = march.primal(plan, {id(f): f.packed for f in plan.fields}, rays, u, active)
             out = layer_io.finalize(layer_io.raw_sums(plan, acc))
             main = out[self.mode]
             L = main[0] + out["res"][0] if "res" in out else main[0]

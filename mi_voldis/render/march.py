@@ -63,6 +63,7 @@ class Plan:
     samples: int
     boxes: tuple
     space: object
+    occupancy: object = None
 
     def __post_init__(self):
         # Chains and terms depend only on the rule and layers: find them once with placeholder values.
@@ -103,7 +104,10 @@ def _distance(plan, rays, t, p):
 
 
 def _sample(plan, data, p, d, active):
-    """Chains' densities and the terms at scene-space points ``p`` seen along world directions ``d``."""
+    """Chains' densities and the terms at scene-space points ``p`` seen along world directions ``d``.
+    Samples in unoccupied cells are not evaluated (every density is 0 there)."""
+    if plan.occupancy is not None:
+        active = active & plan.occupancy.lookup(p)
     values = {}
     for lk in plan.lookups:
         q = p if lk.warp is None else plan.space.from_world(apply_point(lk.warp, plan.space.to_world(p)))
@@ -111,7 +115,8 @@ def _sample(plan, data, p, d, active):
         inside = active & dr.all((pl >= 0.0) & (pl <= 1.0))
         sigma, color = lk.field.eval_local(pl, apply_vector(lk.to_frame, d), data[id(lk.field)], inside)
         values[lk.key] = (sigma, color, inside)
-    return mixing.compose(plan.rule, plan.sources, plan.layers, values)
+    sig, terms = mixing.compose(plan.rule, plan.sources, plan.layers, values)
+    return sig, terms, active
 
 
 def _continue(i, depth, n):
@@ -123,7 +128,8 @@ def _continue(i, depth, n):
 
 
 def primal(plan, data, rays, u, active):
-    """Primal march. Returns {"chain|layer": [R, G, B, alpha, depth-numerator]} (Float arrays).
+    """Primal march. Returns ``(acc, evaluated)``: {"chain|layer": [R, G, B, alpha, depth-numerator]}
+    (Float arrays) and the number of samples evaluated per ray (occupied and before termination).
 
     ``data``: id(field) -> packed grid; ``rays``: from :func:`prepare_rays`; ``u``: per-ray jitter
     in [0, 1) of the stratified samples t_i = t0 + (i + u) dt."""
@@ -135,11 +141,13 @@ def primal(plan, data, rays, u, active):
     acc = {_term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms}
     i = mi.UInt32(0)
     active = mi.Bool(active) & rays.hit
+    evaluated = mi.UInt32(zero)
 
-    def body(i, active, depth, acc):
+    def body(i, active, depth, acc, evaluated):
         t = rays.t0 + (mi.Float(i) + u) * dt
         p = rays.o_s + t * rays.d_s
-        sig, terms = _sample(plan, data, p, rays.d, active)
+        sig, terms, occupied = _sample(plan, data, p, rays.d, active)
+        evaluated = evaluated + dr.select(occupied, 1, 0)
         t = _distance(plan, rays, t, p)
         x = {c: sig[c] * delta for c in plan.chains}
         w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
@@ -150,11 +158,11 @@ def primal(plan, data, rays, u, active):
                                              dr.fma(w[chain], g[2], a[2]), a[3] + wk, dr.fma(wk, t, a[4])]
         depth = {c: depth[c] + x[c] for c in plan.chains}
         i = i + 1
-        return i, active & _continue(i, depth, n), depth, acc
+        return i, active & _continue(i, depth, n), depth, acc, evaluated
 
-    i, active, depth, acc = dr.while_loop((i, active, depth, acc), lambda i, a, *_: a, body,
-                                          label="voldis primal")
-    return acc
+    i, active, depth, acc, evaluated = dr.while_loop((i, active, depth, acc, evaluated), lambda i, a, *_: a,
+                                                     body, label="voldis primal")
+    return acc, evaluated
 
 
 def adjoint(plan, data, rays, u, active, grads, acc):
@@ -179,7 +187,7 @@ def adjoint(plan, data, rays, u, active, grads, acc):
         t = rays.t0 + (mi.Float(i) + u) * dt
         p = rays.o_s + t * rays.d_s
         with dr.resume_grad():
-            sig, terms = _sample(plan, data, p, rays.d, active)
+            sig, terms, _ = _sample(plan, data, p, rays.d, active)
             t = _distance(plan, rays, t, p)
             x = {c: sig[c] * delta for c in plan.chains}
             w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}

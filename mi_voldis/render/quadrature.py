@@ -14,9 +14,9 @@ import drjit as dr
 
 from ..activations import one_minus_exp
 
-# Rays stop once every field's transmittance is below exp(-OPTICAL_DEPTH_CUTOFF) = 1e-5: what is left
-# can change a pixel by at most 1e-5.
-OPTICAL_DEPTH_CUTOFF = 11.5129
+# Rays stop once every field's transmittance is below exp(-OPTICAL_DEPTH_CUTOFF) = 1e-4: what is left
+# can change a pixel by at most 1e-4 (times its colour).
+OPTICAL_DEPTH_CUTOFF = 9.2103
 
 
 def alpha(optical_depth):

@@ -18,7 +18,7 @@ from tqdm import tqdm
 
 from ..data.cameras import mitsuba_to_opengl
 from ..data.llff import write_llff
-from ..io.images import to_uint8, write_png
+from ..io.images import linear_to_uint8, write_png
 from ..transforms import compose
 from . import rigs, variants
 
@@ -114,7 +114,8 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
     for p, kind in enumerate(PASSES):
         renderer = _Renderer(scenes[kind], width, height, spp)
         todo = [k for k in range(views) if kind != "moved" or split[k] == "test"]
-        for k in tqdm(todo, desc=f"{os.path.basename(scene_path)}: {kind}", disable=not progress, leave=False):
+        for k in tqdm(todo, desc=f"{os.path.basename(scene_path)}: {kind}", disable=None if progress else True,
+                      leave=False, mininterval=0.5):
             img = renderer.render(cameras[k], seed * 1_000_003 + p * views + k)
             if kind == "coverage":
                 cov = np.round(np.clip(img.mean(axis=2), 0.0, 1.0) * 65535).astype(np.uint16)
@@ -122,7 +123,7 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
                 write_png(os.path.join(tmp, "masks", names[k]), np.where(cov > 65535 / 2, 255, 0).astype(np.uint8))
             else:
                 folder = {"image": "images", "background": "backgrounds", "moved": "moved"}[kind]
-                write_png(os.path.join(tmp, folder, names[k]), to_uint8(img))
+                write_png(os.path.join(tmp, folder, names[k]), linear_to_uint8(img))
 
     frames = []
     for k, (cam, name) in enumerate(zip(cameras, names)):

@@ -1,0 +1,90 @@
+"""Every hyper-parameter of fitting, named and commented in one place (DVGO / Plenoxels style).
+
+Override from the command line with ``--set name=value`` (repeatable) or a JSON file with
+``--config FILE``; the run writes the effective configuration to RUN/config.json.
+"""
+import dataclasses
+import json
+from dataclasses import dataclass, field
+
+
+@dataclass
+class FitConfig:
+    # ---- schedule: coarse to fine, as data. (step, vertices along the box's longest side)
+    resolution_schedule: list = field(default_factory=lambda: [[0, 48], [400, 96], [900, 144]])
+    steps_full: int = 2000            # steps of the full-scene phase
+    steps_bg: int = 700               # steps of the background refit (strategy "refit")
+    batch_rays: int = 8192            # random rays per step, drawn across all training views
+    step_voxels: float = 0.5          # sample spacing along a ray, in voxels of the current grid
+    max_samples: int = 512            # cap on samples per ray
+
+    # ---- optimiser: Adam on raw grid values, exponential decay to lr * lr_final_ratio
+    lr_density: float = 0.1           # grids want far larger rates than NeRF MLPs (5e-4)
+    lr_color: float = 0.05
+    lr_final_ratio: float = 0.1
+    adam_beta1: float = 0.9
+    adam_beta2: float = 0.99
+    lr_warmup: int = 50               # steps of linear learning-rate ramp after every (re)start of Adam
+
+    # ---- initialisation
+    density_init_alpha: float = 1e-3  # initial opacity of one sample step (softplus-shifted, like DVGO)
+    sh_degree: str = "auto"           # 0, 1, or "auto": degree 1 only if it pays on validation views
+    sh_gain_db: float = 0.2           # "auto": validation PSNR degree 1 must gain over degree 0
+    sh_trial_steps: int = 150         # "auto": colour-only steps of each degree's trial fit
+
+    # ---- regularisers (weights on per-vertex means; gradients added directly to the grids)
+    tv_density: float = 1e-4          # total variation of raw density
+    tv_color: float = 1e-5            # total variation of raw colour coefficients
+    sparsity: float = 1e-5            # L1 on activated density: empty space stays empty
+
+    # ---- modelling only what the scene needs
+    tighten_at_step: int = 400        # shrink the box to occupied space at this step (0: never)
+    tighten_margin: float = 0.04      # margin added around the occupied box, fraction of its size
+    occupancy_resolution: int = 96    # occupancy grid cells along the longest side (0: no skipping)
+    occupancy_alpha: float = 1e-3     # a cell is empty when no voxel in it reaches this opacity: half the
+                                      # initial one, so only space the data carved out is ever skipped
+    occupancy_every: int = 100        # steps between occupancy updates (after tightening)
+    empty_color_alpha: float = 1e-3   # background colour is reset to black where its voxel opacity is lower
+
+    # ---- background
+    bg_strategy: str = "refit"        # "refit": from the full field, hull cleared; "scratch": jointly
+    hull_dilation: float = 0.03       # mask dilation for the visual hull, fraction of image diagonal
+    hull_min_views: float = 0.9       # a cell is in the hull if inside the dilated mask in this fraction of views
+    bg_ray_dilation: float = 0.15     # refit rays come from masks dilated by this fraction of the diagonal
+
+    # ---- bookkeeping
+    seed: int = 0
+    checkpoint_every: int = 250
+    eval_every: int = 250             # held-out PSNR for the PSNR-vs-time log
+    eval_views: int = 3               # held-out views rendered for that log
+    preview_views: int = 3
+
+    @classmethod
+    def from_sources(cls, path=None, overrides=()):
+        cfg = cls()
+        if path:
+            with open(path) as f:
+                cfg = cfg.replace(**json.load(f))
+        for item in overrides:
+            if "=" not in item:
+                raise ValueError(f"--set expects name=value, got '{item}'")
+            name, value = item.split("=", 1)
+            cfg = cfg.replace(**{name: _parse(value)})
+        return cfg
+
+    def replace(self, **changes):
+        names = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise ValueError(f"unknown configuration key(s) {', '.join(unknown)}")
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self):
+        return dataclasses.asdict(self)
+
+
+def _parse(value):
+    try:
+        return json.loads(value)
+    except json.JSONDecodeError:
+        return value

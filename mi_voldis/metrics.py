@@ -1,0 +1,65 @@
+"""Image metrics on display-encoded images in [0, 1]: PSNR, SSIM, mask IoU."""
+import numpy as np
+
+
+def psnr(a, b, mask=None):
+    """Peak signal-to-noise ratio in dB (peak 1); over the pixels of ``mask`` when given."""
+    err = (np.asarray(a, np.float64) - np.asarray(b, np.float64)) ** 2
+    if mask is not None:
+        err = err[np.asarray(mask, bool)]
+    mse = float(err.mean()) if err.size else np.nan
+    return float("inf") if mse == 0 else -10.0 * np.log10(mse)
+
+
+def _gaussian_blur(x, sigma=1.5, radius=5):
+    k = np.exp(-0.5 * (np.arange(-radius, radius + 1) / sigma) ** 2)
+    k /= k.sum()
+    for axis in (0, 1):
+        x = np.apply_along_axis(lambda v: np.convolve(v, k, mode="valid"), axis, x)
+    return x
+
+
+def ssim_map(a, b):
+    """Per-pixel SSIM (Wang et al. 2004: 11x11 Gaussian window, sigma 1.5, K1 = 0.01, K2 = 0.03),
+    averaged over channels; the map is 10 pixels smaller than the images (valid window positions)."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    c1, c2 = 0.01 ** 2, 0.03 ** 2
+    out = []
+    for ch in range(a.shape[2]):
+        x, y = a[..., ch], b[..., ch]
+        mx, my = _gaussian_blur(x), _gaussian_blur(y)
+        sxx = _gaussian_blur(x * x) - mx * mx
+        syy = _gaussian_blur(y * y) - my * my
+        sxy = _gaussian_blur(x * y) - mx * my
+        out.append((2 * mx * my + c1) * (2 * sxy + c2) / ((mx * mx + my * my + c1) * (sxx + syy + c2)))
+    return np.mean(out, axis=0)
+
+
+def ssim(a, b, mask=None):
+    """Mean SSIM; over the window centres inside ``mask`` when given."""
+    m = ssim_map(a, b)
+    if mask is None:
+        return float(m.mean())
+    inner = np.asarray(mask, bool)[5:-5, 5:-5]
+    return float(m[inner].mean()) if inner.any() else np.nan
+
+
+def iou(a, b):
+    a, b = np.asarray(a, bool), np.asarray(b, bool)
+    union = np.logical_or(a, b).sum()
+    return float(np.logical_and(a, b).sum() / union) if union else np.nan
+
+
+def dilate(mask, radius):
+    """Binary dilation by a (2 radius + 1)^2 square (separable), on (H, W) or (N, H, W) masks."""
+    out = np.asarray(mask, bool)
+    for axis in (-2, -1):
+        src, out = out, out.copy()
+        n = src.shape[axis]
+        for shift in range(1, min(radius, n - 1) + 1):
+            lo = [slice(None)] * src.ndim
+            hi = [slice(None)] * src.ndim
+            lo[axis], hi[axis] = slice(0, n - shift), slice(shift, n)
+            out[tuple(lo)] |= src[tuple(hi)]
+            out[tuple(hi)] |= src[tuple(lo)]
+    return out

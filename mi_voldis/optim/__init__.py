@@ -1,0 +1,1 @@
+"""The optimisation driver shared by fitting and every manipulation task."""

@@ -1,0 +1,60 @@
+"""Adam on named Dr.Jit tensors, with per-parameter learning rates and inspectable state.
+
+    m <- b1 m + (1 - b1) g,   v <- b2 v + (1 - b2) g^2,
+    x <- x - lr * (m / (1 - b1^t)) / (sqrt(v / (1 - b2^t)) + eps)
+
+The state (m, v, t) is plain tensors so that checkpoints can store and restore it exactly.
+``warmup``: the learning rate ramps up linearly over this many steps after a (re)start, so that the
+first, sign-like Adam steps after a grid is resampled do not jolt it.
+"""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+
+class Adam:
+    def __init__(self, lrs, beta1=0.9, beta2=0.99, eps=1e-8, warmup=0):
+        self.lrs = dict(lrs)
+        self.beta1, self.beta2, self.eps, self.warmup = beta1, beta2, eps, warmup
+        self.m, self.v, self.t = {}, {}, {}
+
+    def reset(self, key=None):
+        """Forget the moments (of one parameter, or all): e.g. after a grid is resampled."""
+        for store in (self.m, self.v, self.t):
+            if key is None:
+                store.clear()
+            else:
+                store.pop(key, None)
+
+    def step(self, params, grads, scale=1.0):
+        """Update ``params[key]`` (TensorXf) with ``grads[key]`` (flat Float) for every key with a
+        learning rate; ``scale`` multiplies every learning rate (schedules)."""
+        for key, lr in self.lrs.items():
+            if lr == 0 or key not in grads or grads[key] is None:
+                continue
+            x = params[key]
+            g = dr.detach(grads[key])
+            if key not in self.m or dr.width(self.m[key]) != dr.width(g):
+                self.m[key], self.v[key], self.t[key] = dr.zeros(mi.Float, dr.width(g)), dr.zeros(mi.Float, dr.width(g)), 0
+            self.t[key] += 1
+            t = self.t[key]
+            self.m[key] = dr.fma(self.beta1, self.m[key], (1 - self.beta1) * g)
+            self.v[key] = dr.fma(self.beta2, self.v[key], (1 - self.beta2) * dr.square(g))
+            ramp = min(1.0, t / self.warmup) if self.warmup else 1.0
+            step = lr * scale * ramp * np.sqrt(1 - self.beta2 ** t) / (1 - self.beta1 ** t)
+            update = self.m[key] * (step / (dr.sqrt(self.v[key]) + self.eps * np.sqrt(1 - self.beta2 ** t)))
+            params[key] = mi.TensorXf(dr.detach(x.array) - update, x.shape)
+            dr.schedule(params[key], self.m[key], self.v[key])
+
+    def state(self):
+        """{'m/key': array, 'v/key': array} and {'key': t} for checkpoints."""
+        arrays = {f"m/{k}": np.array(v) for k, v in self.m.items()}
+        arrays.update({f"v/{k}": np.array(v) for k, v in self.v.items()})
+        return arrays, dict(self.t)
+
+    def load(self, arrays, t):
+        self.reset()
+        for key, count in t.items():
+            self.m[key] = mi.Float(arrays[f"m/{key}"])
+            self.v[key] = mi.Float(arrays[f"v/{key}"])
+            self.t[key] = int(count)

@@ -1,0 +1,92 @@
+"""The optimisation driver: one loop for fitting phases and manipulation tasks.
+
+A *problem* says what is optimised and how (duck-typed):
+
+* ``params``: a ``mi.SceneParameters`` (or dict) holding the tensors; ``keys``: those to optimise;
+* ``loss(step)`` -> ``(loss, stats)``: a differentiable Dr.Jit scalar built from renders, and a dict of
+  Python numbers for the log (e.g. PSNR, samples evaluated);
+* optional ``before_step(step)`` (schedules: resolution changes, occupancy updates),
+  ``extra_gradients(step, grads)`` (regularisers with analytic gradients, update masks) and
+  ``after_step(step)``.
+
+The loop does the rest: backward pass, Adam with exponential learning-rate decay, progress bar,
+a log of loss / PSNR / time / samples per second, and checkpoints it can resume from.
+"""
+import json
+import os
+import time
+
+import drjit as dr
+import numpy as np
+from tqdm import tqdm
+
+
+class Checkpoint:
+    """One file holding arrays and a JSON header, replaced atomically (a kill -9 leaves the previous one)."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def save(self, arrays, meta):
+        os.makedirs(os.path.dirname(self.path), exist_ok=True)
+        tmp = self.path + ".tmp.npz"
+        np.savez(tmp, __meta__=np.frombuffer(json.dumps(meta).encode(), np.uint8), **arrays)
+        os.replace(tmp, self.path)
+
+    def load(self):
+        if not os.path.isfile(self.path):
+            return None
+        with np.load(self.path) as f:
+            meta = json.loads(bytes(f["__meta__"]).decode())
+            arrays = {k: f[k] for k in f.files if k != "__meta__"}
+        return arrays, meta
+
+
+def decay(step, steps, final_ratio):
+    """Learning-rate factor: exponential from 1 at step 0 to ``final_ratio`` at the last step."""
+    return final_ratio ** (step / max(steps - 1, 1))
+
+
+def optimize(problem, adam, steps, start=0, final_ratio=0.1, log=None, desc="optimise", checkpoint=None,
+             checkpoint_every=0, eval_fn=None, eval_every=0, progress=True):
+    """Run ``problem`` from ``start`` to ``steps``. ``checkpoint(step)`` is called every
+    ``checkpoint_every`` steps and at the end; ``eval_fn(step)`` -> dict every ``eval_every`` steps
+    (merged into the log). Returns the log (a list of dicts, one per logged step)."""
+    log = [] if log is None else log
+    elapsed = log[-1]["time"] if log else 0.0
+    # progress bars on terminals only (None: tqdm disables itself when stderr is not a TTY)
+    bar = tqdm(range(start, steps), desc=desc, disable=None if progress else True, dynamic_ncols=True, leave=False,
+               mininterval=0.5)
+    for step in bar:
+        t0 = time.perf_counter()
+        if hasattr(problem, "before_step"):
+            problem.before_step(step)
+        params = problem.params
+        for key in problem.keys:
+            dr.enable_grad(params[key])
+        params.update()
+        loss, stats = problem.loss(step)
+        dr.backward(loss)
+        grads = {key: dr.grad(params[key]).array for key in problem.keys}
+        if hasattr(problem, "extra_gradients"):
+            grads = problem.extra_gradients(step, grads)
+        adam.step(params, grads, decay(step, steps, final_ratio))
+        params.update()
+        if hasattr(problem, "after_step"):
+            problem.after_step(step)
+        loss_value = float(np.array(loss).ravel()[0])
+        dr.sync_thread()
+        dt = time.perf_counter() - t0
+        elapsed += dt
+        row = {"step": step + 1, "time": elapsed, "loss": loss_value, "step_seconds": dt, **stats}
+        if "samples" in stats:
+            row["msps"] = stats["samples"] / dt / 1e6
+        if eval_fn is not None and eval_every and ((step + 1) % eval_every == 0 or step + 1 == steps):
+            row.update(eval_fn(step + 1))
+        log.append(row)
+        bar.set_postfix({k: f"{row[k]:.4g}" for k in ("loss", "psnr", "msps") if k in row})
+        if checkpoint is not None and checkpoint_every and ((step + 1) % checkpoint_every == 0 or step + 1 == steps):
+            checkpoint(step + 1)
+    bar.close()
+    return log
+

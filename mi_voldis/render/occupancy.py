@@ -1,0 +1,94 @@
+"""Occupancy grid: which cells of scene space may hold density, so the march can skip the others.
+
+A cell is occupied when some field lookup of the plan (its box moved by its transform) has a grid
+vertex in the cell or a neighbouring cell whose density exceeds a threshold. Trilinear interpolation
+never exceeds its corner values, and the one-cell dilation covers voxels that straddle cell borders,
+so a skipped sample has density below the threshold in every field: skipping it changes no chain's
+optical depth by more than threshold x sample spacing. All fields share the grid, so a skipped
+sample is skipped in every field and the samples stay aligned.
+"""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..activations import inverse_softplus
+
+
+class Occupancy:
+    """Boolean grid of shape (Z, Y, X) over the scene-space box [lo, hi]."""
+
+    def __init__(self, lo, hi, cells):
+        self.lo, self.hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+        self.cells = np.asarray(cells, bool)
+        self.shape = self.cells.shape[::-1]  # (X, Y, Z)
+        self.data = mi.Float(self.cells.ravel().astype(np.float32))
+
+    @property
+    def fraction(self):
+        """Occupied fraction of the cells."""
+        return float(self.cells.mean())
+
+    def lookup(self, p):
+        """True where the scene-space points ``p`` fall in an occupied cell."""
+        res = mi.Vector3f(*self.shape)
+        scale = [float(s / e) for s, e in zip(self.shape, self.hi - self.lo)]
+        u = (p - mi.Vector3f(*self.lo.tolist())) * mi.Vector3f(*scale)
+        inside = dr.all((u >= 0.0) & (u < res))
+        i = mi.Vector3u(dr.clip(mi.Vector3i(u), 0, mi.Vector3i(*[s - 1 for s in self.shape])))
+        idx = (i.z * self.shape[1] + i.y) * self.shape[0] + i.x
+        return inside & (dr.gather(mi.Float, self.data, idx, inside) > 0.0)
+
+    @staticmethod
+    def build(lookups, space, resolution, sigma_threshold, boxes_lo, boxes_hi, extra=None):
+        """Occupancy of the density-carrying ``lookups`` over the box [boxes_lo, boxes_hi] with
+        ``resolution`` cells along its longest side. ``extra``: optional (N, 3) scene-space points that
+        must be occupied (e.g. a region a field is about to grow into)."""
+        lo, hi = np.asarray(boxes_lo, np.float64), np.asarray(boxes_hi, np.float64)
+        size = hi - lo
+        shape = np.maximum(1, np.ceil(resolution * size / size.max()).astype(int))  # (X, Y, Z)
+        cells = np.zeros(shape[::-1], bool)
+        for lk in lookups:
+            raw_threshold = float(inverse_softplus(sigma_threshold / lk.field.density_scale))
+            density = np.array(lk.field.density, np.float32)[..., 0]
+            z, y, x = np.nonzero(density > raw_threshold)
+            if len(x) == 0:
+                continue
+            res = np.array(lk.field.shape, np.float64) - 1
+            local = np.stack([x, y, z], -1) / res
+            scene = local_to_scene(lk, space, local)
+            _mark(cells, lo, size, scene)
+        if extra is not None and len(extra):
+            _mark(cells, lo, size, np.asarray(extra, np.float64))
+        return Occupancy(lo, hi, _dilate(cells))
+
+
+def local_to_scene(lk, space, local):
+    """Scene-space positions of unit-cube points of a lookup's field (inverse of its lookup map)."""
+    if lk.warp is None:
+        m = np.linalg.inv(lk.to_local)
+        return local @ m[:3, :3].T + m[:3, 3]
+    to_scene = np.linalg.inv(lk.to_local)  # field box in scene space, then the world transform
+    p = local @ to_scene[:3, :3].T + to_scene[:3, 3]
+    world = space.to_world_np(p)
+    inv = np.linalg.inv(lk.warp)
+    return space.from_world_np(world @ inv[:3, :3].T + inv[:3, 3])
+
+
+def _mark(cells, lo, size, points):
+    shape = np.array(cells.shape[::-1])
+    idx = np.floor((points - lo) / size * shape).astype(np.int64)
+    ok = np.all((idx >= 0) & (idx < shape), axis=1) & np.all(np.isfinite(points), axis=1)
+    idx = idx[ok]
+    cells[idx[:, 2], idx[:, 1], idx[:, 0]] = True
+
+
+def _dilate(cells):
+    """Mark the 26 neighbours of every occupied cell."""
+    z, y, x = cells.shape
+    padded = np.pad(cells, 1)
+    out = np.zeros_like(cells)
+    for dz in range(3):
+        for dy in range(3):
+            for dx in range(3):
+                out |= padded[dz:dz + z, dy:dy + y, dx:dx + x]
+    return out
