@@ -12,7 +12,7 @@ export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test]"
+	$(PY) -m pip install --quiet -e ".[test,clip]"
 	touch $@
 
 setup: $(VENV)/.installed

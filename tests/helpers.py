@@ -40,7 +40,8 @@ def ortho_scene(integ_dict, size=8, spp=1, z0=-3.0, extent=1.0):
 
 def numpy_layers(out):
     """{layer: (rgb (n,3), alpha (n,), depth (n,))} as NumPy arrays."""
-    return {k: (np.array(v[0]).T, np.array(v[1]), np.array(v[2])) for k, v in out.items() if k != "evaluated"}
+    return {k: (np.array(v[0]).T, np.array(v[1]), np.array(v[2])) for k, v in out.items()
+            if k not in ("evaluated", "fg_coverage")}
 
 
 def check_gradient(params, key, loss, n_entries=4, eps=3e-3, rtol=0.02, seed=0):

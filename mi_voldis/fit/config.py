@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 @dataclass
 class FitConfig:
     # ---- schedule: coarse to fine, as data. (step, vertices along the box's longest side)
-    resolution_schedule: list = field(default_factory=lambda: [[0, 48], [400, 96], [900, 144]])
-    steps_full: int = 2000            # steps of the full-scene phase
-    steps_bg: int = 700               # steps of the background refit (strategy "refit")
+    resolution_schedule: list = field(default_factory=lambda: [[0, 48], [250, 96], [500, 128]])
+    steps_full: int = 800             # steps of the full-scene phase
+    steps_bg: int = 150               # steps of the background refit (strategy "refit")
     batch_rays: int = 8192            # random rays per step, drawn across all training views
     step_voxels: float = 0.5          # sample spacing along a ray, in voxels of the current grid
     max_samples: int = 512            # cap on samples per ray
@@ -30,7 +30,7 @@ class FitConfig:
     density_init_alpha: float = 1e-3  # initial opacity of one sample step (softplus-shifted, like DVGO)
     sh_degree: str = "auto"           # 0, 1, or "auto": degree 1 only if it pays on validation views
     sh_gain_db: float = 0.2           # "auto": validation PSNR degree 1 must gain over degree 0
-    sh_trial_steps: int = 150         # "auto": colour-only steps of each degree's trial fit
+    sh_trial_steps: int = 100         # "auto": colour-only steps of each degree's trial fit
 
     # ---- regularisers (weights on per-vertex means; gradients added directly to the grids)
     tv_density: float = 1e-4          # total variation of raw density
@@ -38,7 +38,7 @@ class FitConfig:
     sparsity: float = 1e-5            # L1 on activated density: empty space stays empty
 
     # ---- modelling only what the scene needs
-    tighten_at_step: int = 400        # shrink the box to occupied space at this step (0: never)
+    tighten_at_step: int = 250        # shrink the box to the space rays end in at this step (0: never)
     tighten_margin: float = 0.04      # margin added around the occupied box, fraction of its size
     occupancy_resolution: int = 96    # occupancy grid cells along the longest side (0: no skipping)
     occupancy_alpha: float = 1e-3     # a cell is empty when no voxel in it reaches this opacity: half the
@@ -51,6 +51,7 @@ class FitConfig:
     hull_dilation: float = 0.03       # mask dilation for the visual hull, fraction of image diagonal
     hull_min_views: float = 0.9       # a cell is in the hull if inside the dilated mask in this fraction of views
     bg_ray_dilation: float = 0.15     # refit rays come from masks dilated by this fraction of the diagonal
+    object_alpha: float = 0.5         # hull voxels this opaque in the full field are the object: emptied in bg
 
     # ---- bookkeeping
     seed: int = 0

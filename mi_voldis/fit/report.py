@@ -8,6 +8,7 @@ from ..export import previews
 from ..io.images import write_png
 from ..io.scene_xml import save_field, sensor_xml, write_scene
 from ..metrics import dilate, iou, psnr, ssim
+from ..render.views import layer_channels
 from .raybank import RayBank
 
 OCCUPANCY_FOR_RENDERING = (96, 0.02)  # cells along the longest side, density threshold
@@ -60,10 +61,10 @@ def evaluate(ctx, integrator, samples):
             region = dilate(ds.masks[v], dil) if ds.masks is not None else None
             row.update(bg_psnr=psnr(bg, gt), bg_ssim=ssim(bg, gt), bg_psnr_mask=psnr(bg, gt, region),
                        bg_ssim_mask=ssim(bg, gt, region))
-        if ds.coverage is not None:
-            row["fg_iou"] = iou(out["fg"][1] > 0.5, ds.coverage[v] > 0.5)
-        elif ds.masks is not None:
-            row["fg_iou"] = iou(out["fg"][1] > 0.5, ds.masks[v])
+        truth = ds.coverage[v] > 0.5 if ds.coverage is not None else ds.masks[v] if ds.masks is not None else None
+        if truth is not None:  # the layer's alpha (alpha_full - alpha_bg) and the object's coverage
+            row["fg_iou"] = iou(out["fg"][1] > 0.5, truth)
+            row["fg_coverage_iou"] = iou(out["fg_coverage"] > 0.5, truth)
         rows.append(row)
     summary = {key: float(np.nanmean([r[key] for r in rows])) for key in rows[0] if key != "view"} if rows else {}
     return summary, rows, renders
@@ -72,14 +73,7 @@ def evaluate(ctx, integrator, samples):
 def write_previews(out, renders, views):
     os.makedirs(out, exist_ok=True)
     for v in views:
-        layers = renders[v]
-        channels = {"R": layers["composite"][0][..., 0], "G": layers["composite"][0][..., 1],
-                    "B": layers["composite"][0][..., 2], "A": layers["composite"][1], "depth.Z": layers["full"][2]}
-        for name in ("full", "bg", "fg"):
-            rgb, a, z = layers[name]
-            channels.update({f"{name}.R": rgb[..., 0], f"{name}.G": rgb[..., 1], f"{name}.B": rgb[..., 2],
-                             f"{name}.A": a, f"{name}.Z": z})
-        for name, image in previews(channels, ("full", "bg", "fg")).items():
+        for name, image in previews(layer_channels(renders[v]), ("full", "bg", "fg")).items():
             write_png(os.path.join(out, f"view{v:03d}_{name}.png"), image)
 
 
@@ -99,7 +93,8 @@ def plot_log(path, log, title):
             ax[1].plot(*zip(*pts), "o-" if key == "test_psnr" else "-", lw=0.8, ms=3, label=label)
     ax[1].set_xlabel("seconds")
     ax[1].set_ylabel("PSNR (dB)")
-    ax[1].legend()
+    if ax[1].get_legend_handles_labels()[0]:
+        ax[1].legend()
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -30,12 +30,11 @@ from ..metrics import dilate, psnr
 from ..optim.adam import Adam
 from ..optim.loop import Checkpoint, optimize
 from ..render.rays import render_rays
+from ..render.views import render_camera
 from . import grids
 from .config import FitConfig
 from .hull import visual_hull
 from .raybank import RayBank
-
-EVAL_CHUNK = 1 << 16
 
 
 class FieldFit:
@@ -246,22 +245,9 @@ class FitContext:
         return meta
 
     # -- evaluation
-    def render_view(self, integrator, bank, k, layers=("composite", "full", "bg", "fg"), samples=None):
-        """Layers of view ``k`` of ``bank`` through pixel centres: {layer: (rgb (H, W, 3), alpha, depth)}."""
-        o, d = bank.view_rays(k)
-        out = {layer: ([], [], []) for layer in layers}
-        with dr.suspend_grad():
-            for s in range(0, len(o), EVAL_CHUNK):
-                oo, dd = mi.Point3f(*o[s:s + EVAL_CHUNK].T), mi.Vector3f(*d[s:s + EVAL_CHUNK].T)
-                res = render_rays(integrator, oo, dd, dr.full(mi.Float, 0.5, dr.width(oo)), layers, samples)
-                for layer in layers:
-                    rgb, a, z = res[layer]
-                    out[layer][0].append(np.array(rgb).T)
-                    out[layer][1].append(np.array(a))
-                    out[layer][2].append(np.array(z))
-        h, w = bank.height, bank.width
-        return {layer: (np.concatenate(v[0]).reshape(h, w, 3), np.concatenate(v[1]).reshape(h, w),
-                        np.concatenate(v[2]).reshape(h, w)) for layer, v in out.items()}
+    def render_view(self, integrator, views, k, layers=("composite", "full", "bg", "fg"), samples=None):
+        """Layers of dataset view ``views[k]`` (``views``: a :class:`RayBank`)."""
+        return render_camera(integrator, views.cams[k], layers, samples)
 
 
 def _space_props(space):
@@ -327,14 +313,30 @@ def hull_region(ctx, state):
 def start_background(ctx):
     """Background = full field with the object's visual hull inpainted from around it: a harmonic
     extension of density and colour, so surfaces the object hides (the floor under it) continue
-    through the hull before L_bg refits what some view sees."""
+    through the hull, except in the object's own dense voxels (full-field opacity per voxel above
+    ``object_alpha``), which are emptied so that w_fg = w_full - w_bg keeps the whole object; then
+    L_bg refits what some view sees."""
     full = ctx.states["full"]
-    hull, points = hull_region(ctx, full)
+    hull, points, obj = background_regions(ctx)
+    voxel = ctx.cell(max(full.shape))
+    empty = grids.density_raw_for_alpha(ctx.cfg.density_init_alpha, voxel * ctx.cfg.step_voxels, full.density_scale)
     density = grids.harmonic_fill(full.density, hull)
-    color = grids.harmonic_fill(full.color, hull)
+    density = mi.TensorXf(dr.select(obj, empty, density.array), full.density.shape)
+    color = grids.harmonic_fill(full.color, hull)  # black in the object itself: there c_fg = c_full
+    color = mi.TensorXf(dr.select(dr.repeat(obj, full.color.shape[3]), grids.EMPTY_COLOR, color.array),
+                        full.color.shape)
     ctx.states["bg"] = grids.FieldState(density, color, full.to_world.copy(), full.density_scale)
     ctx.hull_points = points
-    return hull
+
+
+def background_regions(ctx):
+    """The visual hull (Float per vertex), its vertices' positions, and the object's own voxels
+    (Bool: hull vertices whose full-field opacity per voxel exceeds ``object_alpha``)."""
+    full = ctx.states["full"]
+    hull, points = hull_region(ctx, full)
+    voxel = ctx.cell(max(full.shape))
+    dense = full.density.array > grids.density_raw_for_alpha(ctx.cfg.object_alpha, voxel, full.density_scale)
+    return hull, points, (hull > 0) & dense
 
 
 def background_ray_pool(ds, bank, dilation):
@@ -413,9 +415,10 @@ def fit(dataset, run_dir, cfg, resume=False, progress=True):
         t0 = time.perf_counter()
         if "bg" not in ctx.states or ctx.hull_points is None:
             start_background(ctx)
-        hull, _ = hull_region(ctx, ctx.states["bg"])
+        hull, _, obj = background_regions(ctx)
+        free = dr.select(obj, 0.0, hull)  # refit the hull but the object's own voxels, which stay empty
         pool = background_ray_pool(dataset, ctx.bank, cfg.bg_ray_dilation)
-        problem = FieldFit(ctx, ("bg",), ("bg",), ctx.bank, pool=pool, hull=hull, phase=1, schedule=False)
+        problem = FieldFit(ctx, ("bg",), ("bg",), ctx.bank, pool=pool, hull=free, phase=1, schedule=False)
         optimize(problem, ctx.adam, cfg.steps_bg, start_step, cfg.lr_final_ratio, ctx.log, "bg refit",
                  checkpoint("bg"), cfg.checkpoint_every, None, 0, progress)
         problem.sync_states()

@@ -128,8 +128,11 @@ def _continue(i, depth, n):
 
 
 def primal(plan, data, rays, u, active):
-    """Primal march. Returns ``(acc, evaluated)``: {"chain|layer": [R, G, B, alpha, depth-numerator]}
-    (Float arrays) and the number of samples evaluated per ray (occupied and before termination).
+    """Primal march. Returns ``(acc, stats)``: {"chain|layer": [R, G, B, alpha, depth-numerator]}
+    (Float arrays) and per-ray statistics (not differentiable): ``evaluated``, the samples evaluated
+    (occupied and before termination), and with the ``fg`` layer ``fg_coverage`` = sum_i max(w_fg,i, 0),
+    how much of the ray the object covers (sum_i w_fg,i = alpha_full - alpha_bg vanishes wherever an
+    opaque background lies behind the object).
 
     ``data``: id(field) -> packed grid; ``rays``: from :func:`prepare_rays`; ``u``: per-ray jitter
     in [0, 1) of the stratified samples t_i = t0 + (i + u) dt."""
@@ -141,13 +144,14 @@ def primal(plan, data, rays, u, active):
     acc = {_term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms}
     i = mi.UInt32(0)
     active = mi.Bool(active) & rays.hit
-    evaluated = mi.UInt32(zero)
+    stats = {"evaluated": mi.Float(zero), "fg_coverage": mi.Float(zero)}
+    fg_chains = (plan.sources.full_q, plan.sources.bg_q) if "fg" in plan.layers else None
 
-    def body(i, active, depth, acc, evaluated):
+    def body(i, active, depth, acc, stats):
         t = rays.t0 + (mi.Float(i) + u) * dt
         p = rays.o_s + t * rays.d_s
         sig, terms, occupied = _sample(plan, data, p, rays.d, active)
-        evaluated = evaluated + dr.select(occupied, 1, 0)
+        stats = dict(stats, evaluated=stats["evaluated"] + dr.select(occupied, 1.0, 0.0))
         t = _distance(plan, rays, t, p)
         x = {c: sig[c] * delta for c in plan.chains}
         w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
@@ -156,13 +160,15 @@ def primal(plan, data, rays, u, active):
             wk = w[chain] * k
             acc[_term_name(chain, layer)] = [dr.fma(w[chain], g[0], a[0]), dr.fma(w[chain], g[1], a[1]),
                                              dr.fma(w[chain], g[2], a[2]), a[3] + wk, dr.fma(wk, t, a[4])]
+        if fg_chains is not None and fg_chains[0] != fg_chains[1]:
+            stats["fg_coverage"] = stats["fg_coverage"] + dr.maximum(w[fg_chains[0]] - w[fg_chains[1]], 0.0)
         depth = {c: depth[c] + x[c] for c in plan.chains}
         i = i + 1
-        return i, active & _continue(i, depth, n), depth, acc, evaluated
+        return i, active & _continue(i, depth, n), depth, acc, stats
 
-    i, active, depth, acc, evaluated = dr.while_loop((i, active, depth, acc, evaluated), lambda i, a, *_: a,
-                                                     body, label="voldis primal")
-    return acc, evaluated
+    i, active, depth, acc, stats = dr.while_loop((i, active, depth, acc, stats), lambda i, a, *_: a,
+                                                 body, label="voldis primal")
+    return acc, stats
 
 
 def adjoint(plan, data, rays, u, active, grads, acc):

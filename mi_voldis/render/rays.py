@@ -18,10 +18,10 @@ class _RenderRays(dr.CustomOp):
         self.plan, self.u = plan, u
         self.rays = march.prepare_rays(plan, o, d, t_min, t_max)
         data = {id(f): dr.detach(f.packed) for f in plan.fields}
-        self.acc, self.evaluated = march.primal(plan, data, self.rays, u, True)
+        self.acc, stats = march.primal(plan, data, self.rays, u, True)
         self.sums = layer_io.raw_sums(self.plan, self.acc)
         out = layer_io.finalize(self.sums)
-        out["evaluated"] = mi.Float(self.evaluated)  # samples evaluated per ray (not differentiable)
+        out.update(stats)  # per-ray statistics, not differentiable
         dr.eval(out)
         return out
 
@@ -43,7 +43,8 @@ def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=
     ``full``, ``bg``, ``fg``, ``res``; ``samples``: per ray (default: the integrator's). Returns
     ``{layer: (rgb, alpha, depth)}`` (premultiplied ``mi.Color3f``, ``mi.Float``, ``mi.Float``),
     differentiable with respect to the fields' ``density`` and ``color`` tensors, plus
-    ``"evaluated"``: the samples evaluated per ray (occupied cells, before early termination)."""
+    ``"evaluated"``: the samples evaluated per ray (occupied cells, before early termination) and
+    ``"fg_coverage"``: sum_i max(w_fg,i, 0) (see :func:`march.primal`), neither differentiable."""
     plan = integrator.plan(tuple(layers), samples)
     tracked = tuple(f.packed for f in plan.fields if dr.grad_enabled(f.packed))
     return dr.custom(_RenderRays, tracked, plan, mi.Point3f(o), mi.Vector3f(d), mi.Float(u), t_min, t_max)

@@ -1,0 +1,132 @@
+"""CLIP guidance for text-driven colour edits (Benaim et al. 2022, Sec. 3.3, Eqs. 2-3).
+
+A rendered image ``I`` (H x W x 3, display-encoded in [0, 1]; 128 x 128 in the paper) enters CLIP as
+
+    x = (up(I) - mu) / s,
+
+``up`` the bilinear upsampling to CLIP's input size S x S (S = 224 for the paper's ViT-B models; taken
+from the model's vision config) and ``mu``, ``s`` the per-channel mean and standard deviation of the
+folder's image-processor config (the standard CLIP values when it has none). The image embedding
+``E_I(I)`` is the visual projection of the vision transformer's pooled output, the text embedding
+``E_T(p)`` the text projection of the text transformer's pooled output, both L2-normalised, so the
+cosine similarity is their dot product.
+
+Needs ``torch`` and ``transformers`` (imported here only, so the rest of the package runs without
+them) and a local Hugging Face CLIP folder: nothing is downloaded.
+"""
+import json
+import os
+
+import drjit as dr
+import numpy as np
+import torch
+import torch.nn.functional as F
+from transformers import AutoTokenizer, CLIPModel
+
+CLIP_MEAN = (0.48145466, 0.4578275, 0.40821073)
+CLIP_STD = (0.26862954, 0.26130258, 0.27577711)
+
+
+def _read_json(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def image_normalisation(model_dir):
+    """CLIP's per-channel (mean, std): from ``preprocessor_config.json`` or the ``image_processor`` of
+    ``processor_config.json`` in ``model_dir`` when present, else the standard CLIP values."""
+    for name, key in (("preprocessor_config.json", None), ("processor_config.json", "image_processor")):
+        path = os.path.join(model_dir, name)
+        if os.path.isfile(path):
+            config = _read_json(path)
+            config = config.get(key, {}) if key else config
+            if "image_mean" in config and "image_std" in config:
+                return tuple(config["image_mean"]), tuple(config["image_std"])
+    return CLIP_MEAN, CLIP_STD
+
+
+def _check_folder(model_dir):
+    """Raise ``ValueError`` naming ``model_dir`` unless it looks like a local CLIP model folder."""
+    if not os.path.isdir(model_dir):
+        raise ValueError(f"{model_dir}: no such CLIP model folder")
+    config = os.path.join(model_dir, "config.json")
+    if not os.path.isfile(config):
+        raise ValueError(f"{model_dir}: not a CLIP model folder (no config.json)")
+    try:
+        model_type = _read_json(config).get("model_type")
+    except (OSError, ValueError) as e:
+        raise ValueError(f"{model_dir}: config.json cannot be read ({e})") from None
+    if model_type != "clip":
+        raise ValueError(f"{model_dir}: not a CLIP model (config.json has model_type {model_type!r}, "
+                         f"expected 'clip')")
+    files = set(os.listdir(model_dir))
+    if "tokenizer.json" not in files and not {"vocab.json", "merges.txt"} <= files:
+        raise ValueError(f"{model_dir}: CLIP tokenizer files missing (need tokenizer.json, or vocab.json "
+                         f"and merges.txt)")
+
+
+class ClipGuide:
+    """A frozen CLIP model from the local folder ``model_dir`` and the embedding of ``prompt``.
+
+    ``threads`` sets torch's intra-op thread count (process-wide); ``bg_weight`` is ``w_bg`` of
+    :meth:`loss`. Raises ``ValueError`` naming the folder when it is missing or not a loadable CLIP model.
+    """
+
+    def __init__(self, model_dir, prompt, threads=None, bg_weight=0.5):
+        model_dir = os.fspath(model_dir)
+        _check_folder(model_dir)
+        if threads:
+            torch.set_num_threads(int(threads))
+        try:
+            self.tokenizer = AutoTokenizer.from_pretrained(model_dir, local_files_only=True)
+        except Exception as e:  # transformers raises OSError, ValueError, TypeError, ... by cause
+            raise ValueError(f"{model_dir}: the CLIP tokenizer cannot be loaded ({e})") from None
+        try:
+            model, info = CLIPModel.from_pretrained(model_dir, local_files_only=True, output_loading_info=True)
+        except Exception as e:
+            raise ValueError(f"{model_dir}: the CLIP weights cannot be loaded ({e})") from None
+        if info["missing_keys"]:
+            raise ValueError(f"{model_dir}: the CLIP weights lack {len(info['missing_keys'])} parameters "
+                             f"(e.g. {sorted(info['missing_keys'])[0]})")
+        self.model = model.eval().requires_grad_(False)
+        self.size = int(model.config.vision_config.image_size)
+        mean, std = image_normalisation(model_dir)
+        self.mean = torch.tensor(mean, dtype=torch.float32).view(1, 3, 1, 1)
+        self.std = torch.tensor(std, dtype=torch.float32).view(1, 3, 1, 1)
+        self.bg_weight = float(bg_weight)
+        tokens = self.tokenizer([prompt], padding=True, truncation=True, return_tensors="pt",
+                                max_length=model.config.text_config.max_position_embeddings)
+        with torch.no_grad():
+            text = model.text_model(input_ids=tokens["input_ids"], attention_mask=tokens["attention_mask"])
+            self.text = F.normalize(model.text_projection(text.pooler_output), dim=-1)[0]
+
+    def embed(self, images):
+        """L2-normalised ``E_I`` of a torch batch (N, H, W, 3) in [0, 1]: (N, D)."""
+        x = F.interpolate(images.permute(0, 3, 1, 2), size=(self.size, self.size), mode="bilinear",
+                          align_corners=False)
+        pooled = self.model.vision_model(pixel_values=(x - self.mean) / self.std).pooler_output
+        return F.normalize(self.model.visual_projection(pooled), dim=-1)
+
+    def similarity(self, image):
+        """cos(E_I(image), E_T(prompt)) of a NumPy (H, W, 3) image in [0, 1], as a float."""
+        x = torch.from_numpy(np.ascontiguousarray(image, dtype=np.float32))[None]
+        with torch.no_grad():
+            return float(self.embed(x)[0] @ self.text)
+
+    def loss(self, edited, background, mask):
+        """``L_text + w_bg * L_bg`` (mi.Float, one element), differentiable w.r.t. ``edited``:
+
+            L_text = 1 - cos(E_I(M * edited + (1 - M) * background), E_T(prompt))   (Eq. 2)
+            L_bg   = 1 - cos(E_I(edited), E_I(background))                           (Eq. 3)
+
+        ``edited``, ``background``: mi.TensorXf (H, W, 3); ``mask`` M: mi.TensorXf (H, W, 1), 1 on the
+        object. The torch part runs under ``dr.wrap``, so ``dr.backward`` reaches ``edited``.
+        """
+
+        @dr.wrap(source="drjit", target="torch")
+        def clip_loss(edited, background, mask):
+            composite = mask * edited + (1.0 - mask) * background
+            e = self.embed(torch.stack((composite, edited, background)))
+            return (1.0 - e[0] @ self.text + self.bg_weight * (1.0 - e[1] @ e[2])).reshape(1)
+
+        return clip_loss(edited, dr.detach(background), dr.detach(mask)).array
