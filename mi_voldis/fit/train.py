@@ -216,7 +216,8 @@ class FitContext:
     def save(self, phase, step):
         arrays = {}
         meta = {"phase": phase, "step": step, "lo": self.lo.tolist(), "hi": self.hi.tolist(),
-                            "occupancy_on": self.occupancy_on, "log": self.log, "phase_times": self.phase_times}
+                "occupancy_on": self.occupancy_on, "log": self.log, "phase_times": self.phase_times,
+                "sh_choice": self.sh_choice}
         for r, s in self.states.items():
             arrays[f"{r}/density"] = np.array(s.density)
             arrays[f"{r}/color"] = np.array(s.color)

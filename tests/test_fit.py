@@ -1,0 +1,97 @@
+"""Fitting: what a run writes, that it renders from its own scene.xml, resume after kill -9, config."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import mitsuba as mi
+import numpy as np
+import pytest
+from conftest import ROOT, TINY_FIT
+
+from mi_voldis.fit.config import FitConfig
+from mi_voldis.render.views import render_camera
+
+
+def test_run_writes_everything(tiny_run):
+    for name in ("full_density.vol", "full_color.vol", "bg_density.vol", "bg_color.vol", "scene.xml", "config.json",
+                 "metrics.json", "log.json", "training.png", "checkpoints/last.npz"):
+        assert os.path.isfile(os.path.join(tiny_run, name)), name
+    assert any(f.endswith("_fg.png") for f in os.listdir(os.path.join(tiny_run, "previews")))
+    m = json.load(open(os.path.join(tiny_run, "metrics.json")))
+    for key in ("psnr", "ssim", "bg_psnr", "bg_psnr_mask", "bg_ssim_mask", "fg_iou", "fg_coverage_iou"):
+        assert np.isfinite(m["held_out"][key]), key
+    assert m["held_out"]["psnr"] > 14  # 60 steps on 32 x 24 images: far from converged, far from noise
+    assert m["sh_choice"]["degree"] in (0, 1) and m["sh_degree"] == m["sh_choice"]["degree"]
+    assert m["seconds"]["phase_full"] > 0 and m["seconds"]["phase_bg"] > 0 and m["msps_mean"] > 0
+    assert 0 < m["evaluated_samples_per_ray"] <= m["samples_per_ray"]
+    # the box was tightened inside the dataset's box
+    ds_box = json.load(open(os.path.join(m and json.load(open(os.path.join(tiny_run, "config.json")))["dataset"],
+                                         "transforms.json")))["aabb"]
+    assert np.all(np.array(m["box"]["lo"]) >= np.array(ds_box[0]) - 1e-9)
+    assert np.all(np.array(m["box"]["hi"]) <= np.array(ds_box[1]) + 1e-9)
+
+
+def test_scene_xml_renders_the_fitted_fields(tiny_run):
+    """RUN/scene.xml, loaded by Mitsuba, renders what the metrics were computed on (same fields)."""
+    from mi_voldis.data import load_dataset
+    from mi_voldis.export import render_channels
+    scene = mi.load_file(os.path.join(tiny_run, "scene.xml"))
+    cfg = json.load(open(os.path.join(tiny_run, "config.json")))
+    ds = load_dataset(cfg["dataset"])
+    assert len(scene.sensors()) == len(ds.test)
+    direct = render_camera(scene.integrator(), ds.cameras[ds.test[0]], ("full",))["full"][0]
+    m = json.load(open(os.path.join(tiny_run, "metrics.json")))
+    from mi_voldis.metrics import psnr
+    assert abs(psnr(np.clip(direct, 0, 1), ds.images[ds.test[0]]) - m["per_view"][0]["psnr"]) < 1e-3
+    channels = render_channels(scene, 0, spp=4)
+    assert channels["R"].shape == ds.size and np.isfinite(channels["full.R"]).all()
+
+
+def test_bad_config_is_refused():
+    with pytest.raises(ValueError, match="unknown configuration key"):
+        FitConfig.from_sources(None, ["stepz=3"])
+    with pytest.raises(ValueError, match="name=value"):
+        FitConfig.from_sources(None, ["steps_full"])
+
+
+def test_train_script_errors_name_the_dataset(tmp_path):
+    run = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "train.py"), str(tmp_path / "nowhere"),
+                          "--out", str(tmp_path / "run")], capture_output=True, text=True)
+    assert run.returncode != 0 and "nowhere" in run.stderr and "no such dataset" in run.stderr
+
+
+def test_resume_after_kill(tiny_dataset, tmp_path):
+    """kill -9 a fit after its first checkpoint, resume it, and land on the trend of an uninterrupted
+    run; the previous run directory stays whole meanwhile."""
+    args = [sys.executable, os.path.join(ROOT, "scripts", "train.py"), tiny_dataset, "--quiet"]
+    sets = [x for s in TINY_FIT + ["sh_degree=0", "checkpoint_every=5", "steps_full=80"] for x in ("--set", s)]
+    ref = tmp_path / "ref"
+    subprocess.run(args + ["--out", str(ref)] + sets, check=True, capture_output=True)
+    out = tmp_path / "run"
+    os.makedirs(out)
+    (out / "keep.txt").write_text("an earlier run")
+    proc = subprocess.Popen(args + ["--out", str(out)] + sets, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    ckpt = tmp_path / "run.partial" / "checkpoints" / "last.npz"
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:
+        if ckpt.exists():
+            with np.load(ckpt) as f:
+                step = json.loads(bytes(f["__meta__"]).decode())["step"]
+            if step >= 15:
+                break
+        time.sleep(0.05)
+    assert proc.poll() is None, "the fit finished before it could be killed"
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert (out / "keep.txt").exists() and not (out / "metrics.json").exists()  # old run intact
+    run = subprocess.run(args + ["--out", str(out), "--resume"] + sets, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert not (out / "keep.txt").exists() and (out / "metrics.json").exists()  # swapped in when complete
+    a = json.load(open(ref / "metrics.json"))["held_out"]["psnr"]
+    b = json.load(open(out / "metrics.json"))["held_out"]["psnr"]
+    assert abs(a - b) < 1.0, (a, b)
+    log = json.load(open(out / "log.json"))
+    assert [r["step"] for r in log if "psnr" in r][:80] == list(range(1, 81))  # no step lost or repeated
