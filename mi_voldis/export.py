@@ -64,16 +64,16 @@ def write_layers(directory, stem, channels, layers=PREVIEW_LAYERS):
     return exr
 
 
-def render_scene_files(scene, directory, spp=None, size=None, prefix="view"):
-    """Render every sensor of ``scene`` to ``directory``; ``size`` = (width, height) overrides the
-    films. Returns the EXR paths."""
+def render_scene_files(scene, directory, spp=None, size=None, cameras=None, prefix="view"):
+    """Render every sensor of ``scene`` (or, given, each ``(name, Camera)`` of ``cameras``) to
+    ``directory``; ``size`` = (width, height) overrides the films. Returns the EXR paths."""
+    if cameras is not None:
+        sensors = [(name, mi.load_dict(cam.sensor_dict(spp or 1))) for name, cam in cameras]
+    else:
+        sensors = [(f"{prefix}{k:03d}", s) for k, s in enumerate(scene.sensors())]
     if size is not None:
-        params = mi.traverse(scene)
-        for key in [k for k in params.keys() if k.endswith("film.size")]:
-            params[key] = mi.ScalarVector2u(*size)
-        params.update()
-    paths = []
-    for k, sensor in enumerate(scene.sensors()):
-        channels = render_channels(scene, sensor, spp)
-        paths.append(write_layers(directory, f"{prefix}{k:03d}", channels))
-    return paths
+        for _, sensor in sensors:
+            params = mi.traverse(sensor)
+            params["film.size"] = mi.ScalarVector2u(*size)
+            params.update()
+    return [write_layers(directory, name, render_channels(scene, sensor, spp)) for name, sensor in sensors]

@@ -95,3 +95,15 @@ def test_resume_after_kill(tiny_dataset, tmp_path):
     assert abs(a - b) < 1.0, (a, b)
     log = json.load(open(out / "log.json"))
     assert [r["step"] for r in log if "psnr" in r][:80] == list(range(1, 81))  # no step lost or repeated
+
+
+def test_render_script_from_dataset_cameras(tiny_run, tmp_path):
+    cfg = json.load(open(os.path.join(tiny_run, "config.json")))
+    run = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "render.py"),
+                          os.path.join(tiny_run, "scene.xml"), "--cameras", cfg["dataset"], "--split", "test",
+                          "--out", str(tmp_path / "views")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    from mi_voldis.data import load_dataset
+    ds = load_dataset(cfg["dataset"])
+    written = sorted(f for f in os.listdir(tmp_path / "views") if f.endswith(".exr"))
+    assert written == sorted(os.path.splitext(ds.names[v])[0] + ".exr" for v in ds.test)
