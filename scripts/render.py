@@ -27,6 +27,7 @@ def main(argv=None):
 
     os.environ["MI_VOLDIS_VARIANT"] = args.variant  # chosen before the first import of mi_voldis
     import mitsuba as mi
+
     from mi_voldis.export import render_scene_files
 
     if not os.path.isfile(args.scene):

@@ -2,7 +2,6 @@
 import json
 import os
 
-import drjit as dr
 import imageio.v3 as iio
 import mitsuba as mi
 import numpy as np
@@ -10,7 +9,7 @@ import pytest
 from helpers import random_field
 
 from mi_voldis.data import DatasetError, load_dataset
-from mi_voldis.data.cameras import camera_from_intrinsics, mitsuba_to_opengl, pixel_rays
+from mi_voldis.data.cameras import mitsuba_to_opengl, pixel_rays
 from mi_voldis.data.llff import write_llff
 from mi_voldis.data.types import Camera
 from mi_voldis.render.space import SceneSpace
@@ -54,7 +53,8 @@ def write_images(folder, n, h, w, seed=0):
 
 
 def write_transforms(root, cams, names, **top):
-    frames = [{"file_path": f"images/{os.path.splitext(n)[0]}", "transform_matrix": mitsuba_to_opengl(c.to_world).tolist()}
+    frames = [{"file_path": f"images/{os.path.splitext(n)[0]}",
+               "transform_matrix": mitsuba_to_opengl(c.to_world).tolist()}
               for c, n in zip(cams, names)]
     cam = cams[0]
     meta = {"fl_x": cam.focal, "fl_y": cam.focal, "cx": cam.width * (0.5 - cam.principal[0]),

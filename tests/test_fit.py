@@ -26,7 +26,7 @@ def test_run_writes_everything(tiny_run):
     assert m["held_out"]["psnr"] > 14  # 60 steps on 32 x 24 images: far from converged, far from noise
     assert m["sh_choice"]["degree"] in (0, 1) and m["sh_degree"] == m["sh_choice"]["degree"]
     assert m["seconds"]["phase_full"] > 0 and m["seconds"]["phase_bg"] > 0 and m["msps_mean"] > 0
-    assert 0 < m["evaluated_samples_per_ray"] <= m["samples_per_ray"]
+    assert 0 < m["evaluated_samples_per_ray"] <= m["max_samples_per_ray"] and m["step_size"] > 0
     # the box was tightened inside the dataset's box
     ds_box = json.load(open(os.path.join(m and json.load(open(os.path.join(tiny_run, "config.json")))["dataset"],
                                          "transforms.json")))["aabb"]

@@ -121,7 +121,8 @@ def test_bad_vol_files_name_the_file(tmp_path):
     data = (tmp_path / "ok.vol").read_bytes()
     (tmp_path / "short.vol").write_bytes(data[:-8])
     (tmp_path / "junk.vol").write_bytes(b"not a volume at all, but long enough to have a header......")
-    for name, message in (("short.vol", "truncated"), ("junk.vol", "not a Mitsuba .vol"), ("missing.vol", "cannot read")):
+    for name, message in (("short.vol", "truncated"), ("junk.vol", "not a Mitsuba .vol"),
+                          ("missing.vol", "cannot read")):
         with pytest.raises(ValueError, match=f"{name}.*{message}|{message}.*{name}"):
             read_vol(tmp_path / name)
     with pytest.raises(RuntimeError, match="short.vol"):
@@ -156,7 +157,8 @@ def test_field_property_errors(props, message):
     ({"extra": random_field(9)}, "unknown field role 'extra'"),
 ])
 def test_integrator_property_errors(props, message):
-    spec = {"type": "voldis", "full": random_field(7), "bg": random_field(8, to_world=box_transform([0, 0, 0], [1, 1, 1]))}
+    spec = {"type": "voldis", "full": random_field(7),
+            "bg": random_field(8, to_world=box_transform([0, 0, 0], [1, 1, 1]))}
     spec.update(props)
     spec = {k: v for k, v in spec.items() if v is not None}
     with pytest.raises(RuntimeError, match=message):

@@ -2,8 +2,16 @@
 import mitsuba as mi
 import numpy as np
 import pytest
-from helpers import UNIT_BOX, axis_rays, box_transform, constant_field, field_dict, integrator, numpy_layers, \
-    random_field
+from helpers import (
+    UNIT_BOX,
+    axis_rays,
+    box_transform,
+    constant_field,
+    field_dict,
+    integrator,
+    numpy_layers,
+    random_field,
+)
 
 from mi_voldis.render.rays import render_rays
 from mi_voldis.transforms import compose

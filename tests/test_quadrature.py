@@ -59,3 +59,21 @@ def test_activations_precision():
     r = mi.Float([-30.0, -13.8, 0.0, 5.0, 100.0, 1e8])
     np.testing.assert_allclose(np.array(softplus(r)), np.logaddexp(0, np.array(r, np.float64)), rtol=1e-6)
     assert dr.all(dr.isfinite(softplus(mi.Float(-1e30, 1e30))))
+
+
+@pytest.mark.parametrize("step", [0.05, 0.3, 5.0])
+def test_step_size_sampling_is_exact_and_adapts(step):
+    """With step_size, each ray takes ceil(length / step) samples (capped by samples): still exact for a
+    homogeneous box, and a ray crossing a corner takes fewer samples than one crossing the middle."""
+    sigma = 1.3
+    integ = integrator(constant_field(sigma, COLOR, UNIT_BOX), EMPTY, samples=64, step_size=step)
+    o, d, u = axis_rays(16)
+    out = render_rays(integ, o, d, u, layers=("full",))
+    np.testing.assert_allclose(np.array(out["full"][0]).T, np.broadcast_to(COLOR * -np.expm1(-2 * sigma), (16, 3)),
+                               atol=1e-4)
+    assert np.all(np.array(out["evaluated"]) == min(64, int(np.ceil(2.0 / step))))
+    # a ray clipping the box's corner (0.28 long inside it) against one crossing it (2 long)
+    short = render_rays(integ, mi.Point3f(0.4, 0.9, -1.4), dr.normalize(mi.Vector3f(1.0, 0.0, 1.0)), mi.Float(0.5),
+                        ("full",))
+    n_short = np.array(short["evaluated"])[0]
+    assert n_short == min(64, int(np.ceil(0.2 * np.sqrt(2) / step)))

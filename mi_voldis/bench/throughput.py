@@ -11,6 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..fieldspec import box_transform, field_dict
+from ..optim.adam import Adam
 from ..render.rays import render_rays
 
 
@@ -33,18 +34,12 @@ def make_integrator(resolution, samples, channels=3, fields=("full",), seed=0):
     return integ, [f"{role}.{k}" for role in fields for k in ("density", "color")]
 
 
-def _sync():
-    dr.sync_thread()
-
-
 def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, warmup=2):
-    """Seconds per forward and per training step (forward + backward + Adam) and samples/s of each."""
+    """Seconds per forward and per training step (forward + backward + Adam) and million samples
+    (points where the fields are evaluated) per second of each."""
     integ, keys = make_integrator(resolution, samples, channels, fields)
     params = mi.traverse(integ)
-    opt = mi.ad.Adam(lr=1e-2)
-    for k in keys:
-        opt[k] = params[k]
-    params.update(opt)
+    adam = Adam({k: 1e-2 for k in keys})
     target = mi.Color3f(0.5, 0.4, 0.3)
     layers = tuple(k.split(".")[0] for k in keys[::2])
 
@@ -53,25 +48,29 @@ def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, w
         with dr.suspend_grad():
             out = render_rays(integ, o, d, u, layers=layers)
             dr.eval(out)
-        _sync()
+        return float(dr.sum(out["evaluated"])[0])
 
     def train(step):
         o, d, u = random_rays(batch, step)
+        for k in keys:
+            dr.enable_grad(params[k])
+        params.update()
         out = render_rays(integ, o, d, u, layers=layers)
         loss = sum(dr.mean(dr.square(out[lay][0] - target)) for lay in layers)
         dr.backward(loss)
-        opt.step()
-        params.update(opt)
+        adam.step(params, {k: dr.grad(params[k]).array for k in keys})
+        params.update()
         dr.eval(params)
-        _sync()
+        return float(dr.sum(out["evaluated"])[0])
 
     result = {}
     for name, fn in (("forward", forward), ("train", train)):
         for k in range(warmup):
             fn(k)
+        dr.sync_thread()
         t = time.perf_counter()
-        for k in range(steps):
-            fn(warmup + k)
+        evaluated = sum(fn(warmup + k) for k in range(steps))
+        dr.sync_thread()
         seconds = (time.perf_counter() - t) / steps
-        result[name] = {"seconds": seconds, "msps": batch * samples * len(layers) ** 0 / seconds / 1e6}
+        result[name] = {"seconds": seconds, "msps": evaluated / steps / seconds / 1e6}
     return result

@@ -29,12 +29,15 @@ class FitConfig:
     # ---- initialisation
     density_init_alpha: float = 1e-3  # initial opacity of one sample step (softplus-shifted, like DVGO)
     sh_degree: str = "auto"           # 0, 1, or "auto": degree 1 only if it pays on validation views
-    sh_gain_db: float = 0.2           # "auto": validation PSNR degree 1 must gain over degree 0
+    sh_gain_db: float = 1.0           # "auto": validation PSNR degree 1 must gain over degree 0 (it costs
+                                      # about 3x per step: 4x the bytes per lookup, 4x the channels)
     sh_trial_steps: int = 100         # "auto": colour-only steps of each degree's trial fit
 
     # ---- regularisers (weights on per-vertex means; gradients added directly to the grids)
     tv_density: float = 1e-4          # total variation of raw density
     tv_color: float = 1e-5            # total variation of raw colour coefficients
+    tv_every: int = 4                 # apply the TV gradient (scaled by this) every k steps: it costs a pass
+                                      # over the whole grid, more than the rays at 256^3
     sparsity: float = 1e-5            # L1 on activated density: empty space stays empty
 
     # ---- modelling only what the scene needs

@@ -139,17 +139,6 @@ def laplacian(tensor):
     return out * (1.0 / n)
 
 
-def dilate_cells(cells):
-    """Boolean (Z, Y, X) grid grown by one cell in all 26 directions."""
-    z, y, x = cells.shape
-    padded = np.pad(cells, 1)
-    out = np.zeros_like(cells)
-    for dz in range(3):
-        for dy in range(3):
-            for dx in range(3):
-                out |= padded[dz:dz + z, dy:dy + y, dx:dx + x]
-    return out
-
 
 def harmonic_fill(tensor, region, iterations=300):
     """Values of ``tensor`` inside ``region`` (Float per vertex, 1 = fill) replaced by the harmonic

@@ -34,6 +34,12 @@ class RayBank:
     def pixels(self):
         return len(self.views) * self.height * self.width
 
+    def batch(self, rng, n, pool=None):
+        """Rays, colours and masks of ``n`` random pixels (of ``pool``, flat indices, when given), each
+        at a random position inside its pixel."""
+        idx = rng.integers(0, self.pixels, n) if pool is None else pool[rng.integers(0, len(pool), n)]
+        return self.rays(idx.astype(np.uint32), rng.random((n, 2), np.float32))
+
     def rays(self, index, jitter):
         """World rays (o, d), colours and masks of flat pixel indices; ``jitter`` (n, 2) in [0, 1)
         places each ray inside its pixel."""

@@ -16,7 +16,8 @@ OCCUPANCY_FOR_RENDERING = (96, 0.02)  # cells along the longest side, density th
 
 def scene_options(ctx):
     """Integrator properties of the fitted scene (samples, occupancy, scene space)."""
-    opts = {"samples": ctx.samples_per_ray(), "occupancy_resolution": ctx.cfg.occupancy_resolution,
+    opts = {"samples": ctx.cfg.max_samples, "step_size": float(ctx.step_size()),
+            "occupancy_resolution": ctx.cfg.occupancy_resolution,
             "occupancy_threshold": float(ctx.occupancy_sigma())}
     for key, value in ctx.space.properties().items():
         if key != "ndc_to_world":
@@ -44,7 +45,7 @@ def write_run_scene(ctx, out, bodies, views, name="scene.xml", options=None, tra
     write_scene(os.path.join(out, name), bodies, opts, sensors, transforms)
 
 
-def evaluate(ctx, integrator, samples):
+def evaluate(ctx, integrator, samples=None):
     """Metrics on every held-out view, and the rendered layers of each (for previews)."""
     ds, cfg = ctx.ds, ctx.cfg
     views = list(ds.test)

@@ -40,7 +40,7 @@ def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto"
     integrator = ctx.build_integrator()
     if cfg.occupancy_resolution:
         integrator.update_occupancy(cfg.occupancy_resolution, ctx.occupancy_sigma())
-    summary, rows, renders = report.evaluate(ctx, integrator, ctx.samples_per_ray())
+    summary, rows, renders = report.evaluate(ctx, integrator)
     report.write_run_scene(ctx, stage, bodies, list(dataset.test))
     report.write_previews(os.path.join(stage, PREVIEW), renders, list(dataset.test[: cfg.preview_views]))
     report.plot_log(os.path.join(stage, "training.png"), ctx.log, f"{dataset.name}: loss and PSNR against time")
@@ -52,7 +52,7 @@ def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto"
         "msps_mean": float(np.mean([r["msps"] for r in train_rows])) if train_rows else None,
         "evaluated_samples_per_ray": float(np.mean([r["samples"] for r in train_rows[-50:]]) / cfg.batch_rays)
         if train_rows else None,
-        "samples_per_ray": ctx.samples_per_ray(),
+        "max_samples_per_ray": cfg.max_samples, "step_size": ctx.step_size(),
         "grid": {r: list(s.shape) for r, s in ctx.states.items()},
         "sh_degree": ctx.states["full"].sh_degree, "sh_choice": ctx.sh_choice,
         "box": {"kind": dataset.box.kind, "lo": ctx.lo.tolist(), "hi": ctx.hi.tolist()},

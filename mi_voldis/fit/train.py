@@ -24,15 +24,14 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..activations import inverse_softplus
 from ..data.scene_box import scene_space
+from ..grid import dilate_cells
 from ..metrics import dilate, psnr
 from ..optim.adam import Adam
 from ..optim.loop import Checkpoint, optimize
 from ..render.rays import render_rays
 from ..render.views import render_camera
 from . import grids
-from .config import FitConfig
 from .hull import visual_hull
 from .raybank import RayBank
 
@@ -51,7 +50,7 @@ class FieldFit:
         self.integrator = ctx.build_integrator()
         self.params = mi.traverse(self.integrator)
         self.keys = [f"{r}.{k}" for r in self.roles for k in ("density", "color")]
-        self.samples = ctx.samples_per_ray()
+        self.samples = None  # the integrator's: at most max_samples, every step_size
         if ctx.occupancy_on:
             extra = ctx.hull_points if self.hull is not None else None
             self.integrator.update_occupancy(ctx.cfg.occupancy_resolution, ctx.occupancy_sigma(), extra)
@@ -84,8 +83,7 @@ class FieldFit:
         ctx = self.ctx
         rng = np.random.default_rng([ctx.cfg.seed, self.phase, step])
         n = ctx.cfg.batch_rays
-        idx = rng.integers(0, self.bank.pixels, n) if self.pool is None else self.pool[rng.integers(0, len(self.pool), n)]
-        o, d, color, mask = self.bank.rays(idx.astype(np.uint32), rng.random((n, 2), np.float32))
+        o, d, color, mask = self.bank.batch(rng, n, self.pool)
         out = render_rays(self.integrator, o, d, mi.Float(rng.random(n, np.float32)), self.layers, self.samples)
         behind = ctx.behind(rng, n)  # what shows through where a layer is not opaque
         loss = mi.Float(0.0)
@@ -104,11 +102,14 @@ class FieldFit:
 
     def extra_gradients(self, step, grads):
         cfg = self.ctx.cfg
+        tv = cfg.tv_every if step % cfg.tv_every == 0 else 0.0
         for r in self.roles:
             d, c = dr.detach(self.params[f"{r}.density"]), dr.detach(self.params[f"{r}.color"])
-            g_d = grads[f"{r}.density"] + cfg.tv_density * grids.laplacian(d)
-            g_d += (cfg.sparsity / dr.width(d.array)) * dr.rcp(1.0 + dr.exp(-d.array))  # d mean softplus / d raw
-            g_c = grads[f"{r}.color"] + cfg.tv_color * grids.laplacian(c)
+            g_d = grads[f"{r}.density"] + (cfg.sparsity / dr.width(d.array)) * dr.rcp(1.0 + dr.exp(-d.array))
+            g_c = grads[f"{r}.color"]
+            if tv:
+                g_d = g_d + (tv * cfg.tv_density) * grids.laplacian(d)
+                g_c = g_c + (tv * cfg.tv_color) * grids.laplacian(c)
             if self.hull is not None:  # refit only inside the hull
                 g_d = g_d * self.hull
                 g_c = g_c * dr.repeat(self.hull, c.shape[3])
@@ -197,10 +198,9 @@ class FitContext:
         """Density (per scene unit) of a voxel of opacity ``occupancy_alpha`` at the current grid."""
         return -np.log1p(-self.cfg.occupancy_alpha) / grids.voxel_size(self.states["full"])
 
-    def samples_per_ray(self):
-        state = self.states["full"]
-        voxels = np.linalg.norm(np.array(state.shape) - 1)
-        return int(min(self.cfg.max_samples, np.ceil(voxels / self.cfg.step_voxels)))
+    def step_size(self):
+        """Sample spacing along rays (scene units): ``step_voxels`` of the current grid's voxels."""
+        return self.cfg.step_voxels * grids.voxel_size(self.states["full"])
 
     def build_integrator(self):
         full = self.states["full"]
@@ -208,7 +208,8 @@ class FitContext:
         if bg is None:  # the full phase of "refit": an empty stand-in background over the same box
             bg = grids.FieldState(dr.full(mi.TensorXf, -30.0, (2, 2, 2, 1)), dr.zeros(mi.TensorXf, (2, 2, 2, 3)),
                                   full.to_world)
-        props = {"type": "voldis", "full": full.plugin(), "bg": bg.plugin(), "samples": self.samples_per_ray()}
+        props = {"type": "voldis", "full": full.plugin(), "bg": bg.plugin(), "samples": self.cfg.max_samples,
+                 "step_size": self.step_size()}
         props.update(_space_props(self.space))
         return mi.load_dict(props, optimize=False)
 
@@ -236,8 +237,9 @@ class FitContext:
         arrays, meta = loaded
         for r in ("full", "bg"):
             if f"{r}/density" in arrays:
-                self.states[r] = grids.FieldState(mi.TensorXf(arrays[f"{r}/density"]), mi.TensorXf(arrays[f"{r}/color"]),
-                                                  arrays[f"{r}/to_world"], float(arrays[f"{r}/density_scale"]))
+                self.states[r] = grids.FieldState(
+                    mi.TensorXf(arrays[f"{r}/density"]), mi.TensorXf(arrays[f"{r}/color"]), arrays[f"{r}/to_world"],
+                    float(arrays[f"{r}/density_scale"]))
         self.lo, self.hi = np.array(meta["lo"]), np.array(meta["hi"])
         self.occupancy_on = meta["occupancy_on"]
         self.log, self.phase_times, self.sh_choice = meta["log"], meta["phase_times"], meta["sh_choice"]
@@ -301,13 +303,7 @@ def hull_region(ctx, state):
     inside = visual_hull(pts_world, [ctx.ds.cameras[v] for v in train], ctx.ds.masks[train],
                          int(np.ceil(cfg.hull_dilation * diag)), cfg.hull_min_views)
     sx, sy, sz = state.shape
-    cells = inside.reshape(sz, sy, sx)
-    padded = np.pad(cells, 1)
-    grown = np.zeros_like(cells)
-    for dz in range(3):
-        for dy in range(3):
-            for dx in range(3):
-                grown |= padded[dz:dz + sz, dy:dy + sy, dx:dx + sx]
+    grown = dilate_cells(inside.reshape(sz, sy, sx))
     return mi.Float(grown.ravel().astype(np.float32)), pts_scene[grown.ravel()]
 
 
@@ -355,7 +351,7 @@ def clear_empty_background_color(ctx):
     step = ctx.cell(max(bg.shape))
     threshold = grids.density_raw_for_alpha(ctx.cfg.empty_color_alpha, step, bg.density_scale)
     occupied = np.array(bg.density)[..., 0] >= threshold
-    empty = mi.Bool(~grids.dilate_cells(occupied).ravel())
+    empty = mi.Bool(~dilate_cells(occupied).ravel())
     c = bg.color.shape[3]
     color = dr.select(dr.repeat(empty, c), grids.EMPTY_COLOR, bg.color.array)
     ctx.states["bg"] = grids.FieldState(bg.density, mi.TensorXf(color, bg.color.shape), bg.to_world, bg.density_scale)

@@ -35,7 +35,8 @@ class Adam:
             x = params[key]
             g = dr.detach(grads[key])
             if key not in self.m or dr.width(self.m[key]) != dr.width(g):
-                self.m[key], self.v[key], self.t[key] = dr.zeros(mi.Float, dr.width(g)), dr.zeros(mi.Float, dr.width(g)), 0
+                self.m[key], self.v[key] = dr.zeros(mi.Float, dr.width(g)), dr.zeros(mi.Float, dr.width(g))
+                self.t[key] = 0
             self.t[key] += 1
             t = self.t[key]
             self.m[key] = dr.fma(self.beta1, self.m[key], (1 - self.beta1) * g)

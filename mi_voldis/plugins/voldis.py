@@ -48,7 +48,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
          (Default: composite)
      * - samples
        - |int|
-       - Samples per ray, shared by all fields. (Default: 128)
+       - Samples per ray, shared by all fields (with ``step_size``: the most per ray). (Default: 128)
+     * - step_size
+       - |float|
+       - If positive, each ray takes samples every ``step_size`` units of scene space over its
+         interval (rounded to a whole number of equal steps), so short rays take fewer. (Default: 0)
      * - fg_to_world, bg_to_world
        - |transform|
        - Moves the foreground (background): its fields are evaluated at T^-1 p. (Default: identity)
@@ -99,6 +103,9 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         self.samples = int(props.get("samples", 128))
         if self.samples < 1:
             raise ValueError(f"voldis: samples must be >= 1, got {self.samples}")
+        self.step_size = float(props.get("step_size", 0.0))
+        if self.step_size < 0:
+            raise ValueError(f"voldis: step_size must be >= 0, got {self.step_size}")
         self.fg_to_world = to_matrix(props.get("fg_to_world") if "fg_to_world" in props else None)
         self.bg_to_world = to_matrix(props.get("bg_to_world") if "bg_to_world" in props else None)
         for name, m in (("fg_to_world", self.fg_to_world), ("bg_to_world", self.bg_to_world)):
@@ -159,7 +166,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
 
     def to_string(self):
         return (f"VolDisIntegrator[composition={self.composition}, mode={self.mode}, "
-                f"samples={self.samples}, fields={list(self.fields)}]")
+                f"samples={self.samples}, step_size={self.step_size}, fields={list(self.fields)}]")
 
     def aov_names(self):
         names = ["A", "depth.Z"]
@@ -182,7 +189,8 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             boxes = tuple(lk.to_local for lk in lookups
                           if lk.key != sources.fg_color and lk.warp is None)  # density-carrying boxes
             self._plans[key] = march.Plan(tuple(lk for lk in lookups if lk.key in needed), sources,
-                                          self.composition, layers, key[1], boxes, self.space, self.occupancy)
+                                          self.composition, layers, key[1], boxes, self.space, self.occupancy,
+                                          self.step_size)
         return self._plans[key]
 
     def _lookups(self):

@@ -64,6 +64,7 @@ class Plan:
     boxes: tuple
     space: object
     occupancy: object = None
+    step: float = 0.0  # > 0: samples every ``step`` scene units (at most ``samples`` per ray)
 
     def __post_init__(self):
         # Chains and terms depend only on the rule and layers: find them once with placeholder values.
@@ -89,11 +90,23 @@ def prepare_rays(plan, o, d, t_min=0.0, t_max=dr.inf):
     """Scene-space rays and their sampled interval: the union of the plan's boxes, clipped to
     [t_min, t_max] in world space (to [0, 1) of t' in NDC space)."""
     o_s, d_s, t_limit = plan.space.ray(o, d)
-    if plan.space.is_world:
-        t0, t1, hit = sample_interval(plan.boxes, o_s, d_s, t_min, t_max)
-    else:
-        t0, t1, hit = sample_interval(plan.boxes, o_s, d_s, 0.0, t_limit)
+    if not plan.space.is_world:
+        t_min, t_max = 0.0, t_limit
+    t0, t1, hit = sample_interval(plan.boxes, o_s, d_s, t_min, t_max)
+    occupied = plan.occupancy.bounds() if plan.occupancy is not None else None
+    if occupied is not None:  # nothing to evaluate outside the occupied cells' bounds
+        t0, t1, hit = sample_interval([occupied], o_s, d_s, t0, t1)
     return Rays(o, d, o_s, d_s, t0, t1, hit)
+
+
+def sample_count(plan, rays):
+    """Samples per ray and their spacing dt in t: ``samples`` over [t0, t1], or with a ``step`` as many
+    as fit at that scene-space spacing (at least 1, at most ``samples``)."""
+    length = rays.t1 - rays.t0
+    if plan.step > 0:
+        n = dr.clip(mi.UInt32(dr.ceil(length * dr.norm(rays.d_s) / plan.step)), 1, plan.samples)
+        return n, length / mi.Float(n)
+    return plan.samples, length * (1.0 / plan.samples)
 
 
 def _distance(plan, rays, t, p):
@@ -135,9 +148,8 @@ def primal(plan, data, rays, u, active):
     opaque background lies behind the object).
 
     ``data``: id(field) -> packed grid; ``rays``: from :func:`prepare_rays`; ``u``: per-ray jitter
-    in [0, 1) of the stratified samples t_i = t0 + (i + u) dt."""
-    n = plan.samples
-    dt = (rays.t1 - rays.t0) * (1.0 / n)
+    in [0, 1) of the stratified samples t_i = t0 + (i + u) dt (see :func:`sample_count`)."""
+    n, dt = sample_count(plan, rays)
     delta = dt * dr.norm(rays.d_s)
     zero = dr.zeros(mi.Float, dr.width(rays.t0))
     depth = {c: mi.Float(zero) for c in plan.chains}
@@ -176,8 +188,7 @@ def adjoint(plan, data, rays, u, active, grads, acc):
 
     ``grads``: layer -> (dRGB Color3f, d_alpha, d_depth_numerator), the adjoint of each layer's raw
     sums; ``acc``: the primal's per-term sums for the same rays and jitter."""
-    n = plan.samples
-    dt = (rays.t1 - rays.t0) * (1.0 / n)
+    n, dt = sample_count(plan, rays)
     delta = dt * dr.norm(rays.d_s)
     zero = dr.zeros(mi.Float, dr.width(rays.t0))
     depth = {c: mi.Float(zero) for c in plan.chains}

@@ -12,6 +12,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..activations import inverse_softplus
+from ..grid import dilate_cells
 
 
 class Occupancy:
@@ -22,6 +23,19 @@ class Occupancy:
         self.cells = np.asarray(cells, bool)
         self.shape = self.cells.shape[::-1]  # (X, Y, Z)
         self.data = mi.Float(self.cells.ravel().astype(np.float32))
+
+    def bounds(self):
+        """World -> unit-cube matrix of the axis-aligned box around the occupied cells (None when
+        nothing is occupied): rays are only sampled inside it."""
+        z, y, x = np.nonzero(self.cells)
+        if len(x) == 0:
+            return None
+        cell = (self.hi - self.lo) / np.array(self.shape)
+        lo = self.lo + np.array([x.min(), y.min(), z.min()]) * cell
+        hi = self.lo + (np.array([x.max(), y.max(), z.max()]) + 1) * cell
+        m = np.diag([*(1.0 / (hi - lo)), 1.0])
+        m[:3, 3] = -lo / (hi - lo)
+        return m
 
     @property
     def fraction(self):
@@ -59,7 +73,7 @@ class Occupancy:
             _mark(cells, lo, size, scene)
         if extra is not None and len(extra):
             _mark(cells, lo, size, np.asarray(extra, np.float64))
-        return Occupancy(lo, hi, _dilate(cells))
+        return Occupancy(lo, hi, dilate_cells(cells))
 
 
 def local_to_scene(lk, space, local):
@@ -80,15 +94,3 @@ def _mark(cells, lo, size, points):
     ok = np.all((idx >= 0) & (idx < shape), axis=1) & np.all(np.isfinite(points), axis=1)
     idx = idx[ok]
     cells[idx[:, 2], idx[:, 1], idx[:, 0]] = True
-
-
-def _dilate(cells):
-    """Mark the 26 neighbours of every occupied cell."""
-    z, y, x = cells.shape
-    padded = np.pad(cells, 1)
-    out = np.zeros_like(cells)
-    for dz in range(3):
-        for dy in range(3):
-            for dx in range(3):
-                out |= padded[dz:dz + z, dy:dy + y, dx:dx + x]
-    return out

@@ -48,7 +48,7 @@ class FittedRun:
         base = self.scene.integrator()
         self.fields = dict(base.fields)
         self.space = base.space
-        self.options = {"samples": base.samples, "composition": base.composition}
+        self.options = {"samples": base.samples, "step_size": base.step_size, "composition": base.composition}
         self.occupancy = (int(self.config.get("occupancy_resolution", 0)), base.occupancy_threshold)
 
     def integrator(self, fields=None, **props):
@@ -111,8 +111,7 @@ class EditProblem:
     def loss(self, step):
         rng = np.random.default_rng([self.seed, 7, step])
         n = self.batch
-        idx = rng.integers(0, self.bank.pixels, n) if self.pool is None else self.pool[rng.integers(0, len(self.pool), n)]
-        o, d, color, mask = self.bank.rays(idx.astype(np.uint32), rng.random((n, 2), np.float32))
+        o, d, color, mask = self.bank.batch(rng, n, self.pool)
         out = render_rays(self.integrator, o, d, mi.Float(rng.random(n, np.float32)), self.layers)
         loss = self.loss_fn(out, color, mask)
         return loss, {"samples": float(dr.sum(out["evaluated"])[0])}

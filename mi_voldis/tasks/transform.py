@@ -63,12 +63,14 @@ def run(run, output, options):
     output.write_scene({"full": run.fields["full"], "bg": run.fields["bg"]}, {"composition": rule},
                        {"fg_to_world": matrix})
     table = {}
-    has_gt = ds.moved is not None and ds.moved_transform is not None and np.allclose(matrix, ds.moved_transform, atol=1e-4)
-    views = [v for v in ds.test if ds.moved is not None and np.isfinite(ds.moved[v]).all()] if has_gt else []
+    has_gt = ds.moved_transform is not None and np.allclose(matrix, ds.moved_transform, atol=1e-4)
+    views = [v for v in ds.test if np.isfinite(ds.moved[v]).all()] if has_gt and ds.moved is not None else []
     for name in RULES:
         integ = edited if name == rule else run.integrator(composition=name, fg_to_world=to_world)
-        scores = [(psnr(np.clip(out["composite"][0], 0, 1), ds.moved[v]), ssim(np.clip(out["composite"][0], 0, 1), ds.moved[v]))
-                  for v in views for out in [render_camera(integ, ds.cameras[v], ("composite",))]]
+        scores = []
+        for v in views:
+            image = np.clip(render_camera(integ, ds.cameras[v], ("composite",))["composite"][0], 0, 1)
+            scores.append((psnr(image, ds.moved[v]), ssim(image, ds.moved[v])))
         table[name] = {"psnr": float(np.mean([s[0] for s in scores])) if scores else None,
                        "ssim": float(np.mean([s[1] for s in scores])) if scores else None}
     return output.finish({"task": "transform", "matrix": matrix.tolist(), "composition": rule,

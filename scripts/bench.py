@@ -1,0 +1,29 @@
+"""Speed against error, side by side, in one command.
+
+    python scripts/bench.py [--quick] [--work out/bench] [--report reports]
+
+Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
+PNG plots. --quick is a smoke run of a few minutes; the full run takes under an hour on 2 cores.
+"""
+import argparse
+import os
+import sys
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="small configurations only (a few minutes)")
+    ap.add_argument("--work", default="out/bench", help="datasets, runs and logs")
+    ap.add_argument("--report", default="reports", help="where bench.md and the plots go")
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    args = ap.parse_args(argv)
+    os.environ["MI_VOLDIS_VARIANT"] = args.variant
+    from mi_voldis.bench import report
+    from mi_voldis.bench.run import run_all
+    results = run_all(args.quick, os.path.abspath(args.work), args.report)
+    report.write(results, args.report, "python scripts/bench.py" + (" --quick" if args.quick else ""))
+    print(os.path.join(args.report, "bench.md"))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
