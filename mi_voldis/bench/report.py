@@ -36,6 +36,8 @@ def _throughput(results):
           f"{bw['numpy_gbs']:.1f} GB/s with NumPy on one. A sample touches {BYTES_FORWARD} B forward "
           f"(8 corners x 4 floats) and about {BYTES_TRAIN} B in training (lookup, adjoint lookup, gradient "
           f"read-modify-write): bounds of {fwd_bound:.0f} and {train_bound:.0f} Msps.", "",
+          "PyTorch (the same model with `grid_sample`, `mi_voldis/bench/torch_reference.py`) runs on the rows with "
+          "128 samples per ray (its steps take seconds; all 27 rows would not fit the hour).", "",
           "| grid | samples/ray | rays | voldis fwd Msps | voldis train Msps | % of bound | torch fwd Msps | "
           "torch train Msps | train ratio |", "|---|---|---|---|---|---|---|---|---|"]
     for row in results["throughput"]:
