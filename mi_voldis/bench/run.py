@@ -47,7 +47,8 @@ def run_throughput(quick):
     rows = []
     for r, n, b in grid:
         heavy = r == 256 or b == 65536
-        row = {"resolution": r, "samples": n, "batch": b, "voldis": throughput.measure(r, n, b, steps=3 if heavy else 5)}
+        row = {"resolution": r, "samples": n, "batch": b,
+               "voldis": throughput.measure(r, n, b, steps=3 if heavy else 5)}
         if torch_reference is not None and (r, n, b) in torch_rows:
             row["torch"] = torch_reference.measure(r, n, b, steps=2 if heavy else 4, warmup=1)
         rows.append(row)

@@ -8,7 +8,7 @@ Foreground weights w_fg = w_full - w_bg may be negative, so a foreground alpha c
 import drjit as dr
 import mitsuba as mi
 
-from .march import _term_name
+from .march import term_name
 
 ALPHA_EPS = 1e-4
 EXR_LAYERS = ("full", "bg", "fg")  # layers written beside the main image; "res" when present
@@ -18,7 +18,7 @@ def raw_sums(plan, acc):
     """layer -> [R, G, B, A, D] summed over the chains contributing to it."""
     sums = {}
     for chain, layer in plan.terms:
-        a = acc[_term_name(chain, layer)]
+        a = acc[term_name(chain, layer)]
         sums[layer] = a if layer not in sums else [s + v for s, v in zip(sums[layer], a)]
     for layer in plan.layers:  # a layer with no terms (e.g. fg of nothing) is zero
         sums.setdefault(layer, [mi.Float(0.0)] * 5)

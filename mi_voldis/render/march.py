@@ -82,7 +82,8 @@ class Plan:
         return list(out.values())
 
 
-def _term_name(chain, layer):
+def term_name(chain, layer):
+    """Key of a (chain, layer) term in the march's accumulators."""
     return f"{chain}|{layer}"
 
 
@@ -153,7 +154,7 @@ def primal(plan, data, rays, u, active):
     delta = dt * dr.norm(rays.d_s)
     zero = dr.zeros(mi.Float, dr.width(rays.t0))
     depth = {c: mi.Float(zero) for c in plan.chains}
-    acc = {_term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms}
+    acc = {term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms}
     i = mi.UInt32(0)
     active = mi.Bool(active) & rays.hit
     stats = {"evaluated": mi.Float(zero), "fg_coverage": mi.Float(zero)}
@@ -168,9 +169,9 @@ def primal(plan, data, rays, u, active):
         x = {c: sig[c] * delta for c in plan.chains}
         w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
         for (chain, layer), (g, k) in terms.items():
-            a = acc[_term_name(chain, layer)]
+            a = acc[term_name(chain, layer)]
             wk = w[chain] * k
-            acc[_term_name(chain, layer)] = [dr.fma(w[chain], g[0], a[0]), dr.fma(w[chain], g[1], a[1]),
+            acc[term_name(chain, layer)] = [dr.fma(w[chain], g[0], a[0]), dr.fma(w[chain], g[1], a[1]),
                                              dr.fma(w[chain], g[2], a[2]), a[3] + wk, dr.fma(wk, t, a[4])]
         if fg_chains is not None and fg_chains[0] != fg_chains[1]:
             stats["fg_coverage"] = stats["fg_coverage"] + dr.maximum(w[fg_chains[0]] - w[fg_chains[1]], 0.0)
@@ -195,7 +196,7 @@ def adjoint(plan, data, rays, u, active, grads, acc):
     rho = {c: mi.Float(zero) for c in plan.chains}
     for chain, layer in plan.terms:
         g_rgb, g_a, g_d = grads[layer]
-        a = acc[_term_name(chain, layer)]
+        a = acc[term_name(chain, layer)]
         rho[chain] += g_rgb[0] * a[0] + g_rgb[1] * a[1] + g_rgb[2] * a[2] + g_a * a[3] + g_d * a[4]
     i = mi.UInt32(0)
     active = mi.Bool(active) & rays.hit
