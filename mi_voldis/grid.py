@@ -29,38 +29,37 @@ def grid_shape(tensor):
 
 
 class _Pack(dr.CustomOp):
-    """Channel interleaving as a custom op: it is a permutation, so its adjoint is a gather too
-    (Dr.Jit's generic adjoint of the scatter would be a scatter-add into every tensor's gradient)."""
+    """Channel interleaving as a custom op. Both directions are single gathers: the packed array
+    reads every slot from its tensor (or 0 in the padding), and since packing is a permutation the
+    adjoint reads every tensor element back from the packed gradient (Dr.Jit's generic adjoint of a
+    scatter would be a scatter-add into zeroed gradients)."""
 
     def eval(self, tensors):
         self.shapes = [t.shape for t in tensors]
-        n = self.shapes[0][0] * self.shapes[0][1] * self.shapes[0][2]
         self.width = packet_width(sum(s[3] for s in self.shapes))
-        self.vertex = dr.arange(mi.UInt32, n)
-        packed = dr.zeros(mi.Float, n * self.width)
-        for channel, offset, tensor in self._channels(tensors):
-            dr.scatter(packed, dr.gather(mi.Float, tensor.array, self.vertex * tensor.shape[3] + channel),
-                       self.vertex * self.width + offset)
+        n = self.shapes[0][0] * self.shapes[0][1] * self.shapes[0][2]
+        slot = dr.arange(mi.UInt32, n * self.width)
+        vertex, channel = slot // self.width, slot % self.width
+        packed = mi.Float(0.0)
+        for offset, tensor in zip(self._offsets(), tensors):
+            c = tensor.shape[3]
+            mine = (channel >= offset) & (channel < offset + c)
+            packed = dr.select(mine, dr.gather(mi.Float, tensor.array, vertex * c + channel - offset, mine), packed)
         return packed
 
-    def _channels(self, tensors):
-        """(channel in its tensor, channel in the packed vertex, tensor) for every channel."""
-        offset = 0
-        for tensor in tensors:
-            for channel in range(tensor.shape[3]):
-                yield channel, offset + channel, tensor
-            offset += tensor.shape[3]
+    def _offsets(self):
+        """Packed-vertex slot of every tensor's first channel."""
+        return np.cumsum([0] + [s[3] for s in self.shapes])[:-1].tolist()
 
     def backward(self):
         grad = self.grad_out()
-        flat = [dr.zeros(mi.Float, dr.prod(shape)) for shape in self.shapes]
-        offset = 0
-        for shape, g in zip(self.shapes, flat):
-            for channel in range(shape[3]):
-                dr.scatter(g, dr.gather(mi.Float, grad, self.vertex * self.width + offset + channel),
-                           self.vertex * shape[3] + channel)
-            offset += shape[3]
-        self.set_grad_in("tensors", [mi.TensorXf(g, shape) for g, shape in zip(flat, self.shapes)])
+        grads = []
+        for offset, shape in zip(self._offsets(), self.shapes):
+            c = shape[3]
+            index = dr.arange(mi.UInt32, int(np.prod(shape)))
+            grads.append(mi.TensorXf(dr.gather(mi.Float, grad, (index // c) * self.width + index % c + offset),
+                                     shape))
+        self.set_grad_in("tensors", grads)
 
 
 def pack(tensors):

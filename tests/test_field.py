@@ -88,3 +88,20 @@ def test_variant_checks():
         mi_voldis.check_variant("llvm_ad_spectral")
     mi_voldis.set_variant(mi.variant())  # re-registration keeps the plugins loadable
     assert load(np.zeros((2, 2, 2, 1)), np.zeros((2, 2, 2, 3))).shape == (2, 2, 2)
+
+
+def test_pack_interleaves_channels_and_its_adjoint_gathers_them_back():
+    from mi_voldis import grid
+    rng = np.random.default_rng(3)
+    d = rng.normal(size=(2, 3, 4, 1)).astype(np.float32)
+    c = rng.normal(size=(2, 3, 4, 12)).astype(np.float32)  # 13 channels: packet width 16, 3 padding
+    td, tc = mi.TensorXf(d), mi.TensorXf(c)
+    dr.enable_grad(td, tc)
+    packed = grid.pack([td, tc])
+    expected = np.concatenate([d, c, np.zeros((2, 3, 4, 3), np.float32)], axis=3).ravel()
+    assert np.array_equal(np.array(packed), expected)
+    weights = rng.normal(size=expected.size).astype(np.float32)
+    dr.backward(dr.sum(packed * mi.Float(weights)))
+    w = weights.reshape(2, 3, 4, 16)
+    assert np.array_equal(np.array(dr.grad(td)), w[..., :1])
+    assert np.array_equal(np.array(dr.grad(tc)), w[..., 1:13])
