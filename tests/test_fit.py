@@ -27,6 +27,7 @@ def test_run_writes_everything(tiny_run):
     assert m["sh_choice"]["degree"] in (0, 1) and m["sh_degree"] == m["sh_choice"]["degree"]
     assert m["seconds"]["phase_full"] > 0 and m["seconds"]["phase_bg"] > 0 and m["msps_mean"] > 0
     assert 0 < m["evaluated_samples_per_ray"] <= m["max_samples_per_ray"] and m["step_size"] > 0
+    assert m["peak_rss_mib"] > 100  # Python + Mitsuba + the fields: the process's own peak, recorded by itself
     # the box was tightened inside the dataset's box
     ds_box = json.load(open(os.path.join(m and json.load(open(os.path.join(tiny_run, "config.json")))["dataset"],
                                          "transforms.json")))["aabb"]
@@ -48,6 +49,17 @@ def test_scene_xml_renders_the_fitted_fields(tiny_run):
     assert abs(psnr(np.clip(direct, 0, 1), ds.images[ds.test[0]]) - m["per_view"][0]["psnr"]) < 1e-3
     channels = render_channels(scene, 0, spp=4)
     assert channels["R"].shape == ds.size and np.isfinite(channels["full.R"]).all()
+
+
+def test_peak_rss_follows_this_process_not_its_parent():
+    from mi_voldis.fit.report import peak_rss_mib
+    code = ("import numpy as np; from mi_voldis.fit.report import peak_rss_mib; a = np.ones(50_000_000); "
+            "print(peak_rss_mib())")
+    big = np.ones(250_000_000)  # 2 GB in the parent: a forked child's ru_maxrss would include it
+    assert peak_rss_mib() >= big.nbytes / 2**20
+    child = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                                 cwd=ROOT).stdout)
+    assert 400 * 0.9 < child < 1500  # its own 400 MB array plus the interpreter, not the parent's 2 GB
 
 
 def test_bad_config_is_refused():

@@ -42,11 +42,11 @@ def copy_bandwidth(gib=1.0, repeats=3):
     src = np.ones(n, np.float32)
     dst = np.empty_like(src)
     best_np = min(_timed(lambda: np.copyto(dst, src)) for _ in range(repeats))
-    x = dr.full(mi.Float, 1.0, n)
+    x = dr.arange(mi.Float, n)  # an evaluated array (dr.full would stay a literal: no memory to read)
     dr.eval(x)
 
     def jit_copy():
-        y = x * 1.5  # (x + 0 would be folded away without a kernel)
+        y = x * 1.5
         dr.eval(y)
         dr.sync_thread()
     jit_copy()

@@ -158,7 +158,9 @@ def _copy_previews(run, report_dir, scene):
 
 
 def _memory(results):
-    md = ["## 5. Peak memory of fitting", "", "| run | grid | peak RSS (MiB) |", "|---|---|---|"]
+    md = ["## 5. Peak memory of fitting", "", "Peak resident memory of each fitting process (`VmHWM`, "
+          "recorded by the process itself in its metrics.json).", "",
+          "| run | grid | peak RSS (MiB) |", "|---|---|---|"]
     for name, f in results["fits"].items():
-        md.append(f"| {name} | {'x'.join(map(str, f['metrics']['grid']['full']))} | {f['rss_mib']:.0f} |")
+        md.append(f"| {name} | {'x'.join(map(str, f['metrics']['grid']['full']))} | {_f(f['rss_mib'], 0)} |")
     return md + [""]

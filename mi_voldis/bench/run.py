@@ -25,14 +25,14 @@ SHARED = os.path.join(os.path.dirname(ROOT), "shared", "data")
 
 
 def child(args, log_file=None):
-    """Run a child Python process; returns (seconds, peak RSS in MiB). Raises on failure."""
+    """Run a child Python process; returns its wall-clock seconds. Raises on failure. (Children report
+    their own peak memory in metrics.json: ``ru_maxrss`` of a forked child includes the parent's.)"""
     t = time.perf_counter()
     with open(log_file or os.devnull, "w") as log:
-        proc = subprocess.Popen([sys.executable] + args, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT)
-        _, status, usage = os.wait4(proc.pid, 0)
+        status = subprocess.run([sys.executable] + args, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT).returncode
     if status != 0:
         raise RuntimeError(f"{' '.join(args)} failed (status {status}); see {log_file}")
-    return time.perf_counter() - t, usage.ru_maxrss / 1024.0
+    return time.perf_counter() - t
 
 
 # ------------------------------------------------------------------------------------ 1. throughput
@@ -61,6 +61,7 @@ TABLETOP_CONFIGS = {  # name: --set overrides of the fitting configuration
     "128 vox, 0.5 step (default)": [],
     "160 vox, 0.5 step": ["resolution_schedule=[[0,48],[250,96],[500,160]]"],
     "128 vox, 1.0 step": ["step_voxels=1.0"],
+    "128 vox, 0.5 step, SH degree 0 (not chosen)": ["sh_degree=0"],
 }
 FERN_CONFIGS = {"192 vox (NDC), 0.5 step": ["resolution_schedule=[[0,64],[300,128],[700,192]]", "steps_full=1400",
                                             "tighten_at_step=300"]}
@@ -72,14 +73,14 @@ def fit(dataset, out, sets, log_dir):
     args = ["scripts/train.py", dataset, "--out", out, "--quiet", "--set", "eval_every=100"]
     for s in sets:
         args += ["--set", s]
-    seconds, rss = child(args, os.path.join(log_dir, os.path.basename(out) + ".log"))
+    seconds = child(args, os.path.join(log_dir, os.path.basename(out) + ".log"))
     with open(os.path.join(out, "metrics.json")) as f:
         metrics = json.load(f)
     with open(os.path.join(out, "log.json")) as f:
         log = json.load(f)
     curve = [(r["time"], r["test_psnr"]) for r in log if "test_psnr" in r]
-    return {"out": out, "wall_seconds": seconds, "rss_mib": rss, "metrics": metrics, "curve": curve,
-            "command": "python " + " ".join(args)}
+    return {"out": out, "wall_seconds": seconds, "rss_mib": metrics.get("peak_rss_mib"), "metrics": metrics,
+            "curve": curve, "command": "python " + " ".join(args)}
 
 
 def time_to_within(curve, best, tolerance=0.5):
@@ -98,10 +99,11 @@ def make_data(scene, out, log_dir, quick):
 # ------------------------------------------------------------------------------------ 4. accuracy
 def task(run, name, extra, log_dir):
     args = ["scripts/optimize.py", run, "--task", name, "--quiet"] + extra
-    seconds, rss = child(args, os.path.join(log_dir, f"{os.path.basename(run)}_{name}.log"))
+    seconds = child(args, os.path.join(log_dir, f"{os.path.basename(run)}_{name}.log"))
     with open(os.path.join(run, name, "metrics.json")) as f:
-        return {"run": run, "seconds": seconds, "rss_mib": rss, "metrics": json.load(f),
-                "command": "python " + " ".join(args)}
+        metrics = json.load(f)
+    return {"run": run, "seconds": seconds, "rss_mib": metrics.get("peak_rss_mib"), "metrics": metrics,
+            "command": "python " + " ".join(args)}
 
 
 def run_all(quick, work, report_dir):

@@ -102,6 +102,19 @@ def plot_log(path, log, title):
     plt.close(fig)
 
 
+def peak_rss_mib():
+    """Peak resident memory of this process in MiB (``VmHWM``; None where /proc is missing).
+
+    Unlike ``ru_maxrss``, VmHWM belongs to the address space and starts afresh at ``exec``: a child
+    process forked from a large parent would otherwise report the parent's peak."""
+    try:
+        with open("/proc/self/status") as f:
+            line = next(line for line in f if line.startswith("VmHWM:"))
+    except (OSError, StopIteration):
+        return None
+    return int(line.split()[1]) / 1024.0
+
+
 def write_json(path, data):
     tmp = path + ".tmp"
     with open(tmp, "w") as f:

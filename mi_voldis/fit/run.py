@@ -49,6 +49,7 @@ def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto"
         "dataset": dataset.name, "views": {"train": len(dataset.train), "test": len(dataset.test)},
         "held_out": summary, "per_view": rows,
         "seconds": {"fit": fit_seconds, **{f"phase_{k}": v for k, v in ctx.phase_times.items()}},
+        "peak_rss_mib": report.peak_rss_mib(),
         "msps_mean": float(np.mean([r["msps"] for r in train_rows])) if train_rows else None,
         "evaluated_samples_per_ray": float(np.mean([r["samples"] for r in train_rows[-50:]]) / cfg.batch_rays)
         if train_rows else None,

@@ -17,7 +17,7 @@ from ..data import DatasetError, load_dataset
 from ..export import linear_channels, previews
 from ..fit import grids
 from ..fit.raybank import RayBank
-from ..fit.report import plot_log, write_json
+from ..fit.report import peak_rss_mib, plot_log, write_json
 from ..io.exr import write_exr
 from ..io.images import contact_sheet, write_png
 from ..io.scene_xml import save_field, sensor_xml, write_scene
@@ -182,7 +182,7 @@ class TaskOutput:
         if log:
             plot_log(os.path.join(self.dir, "loss.png"), log, f"{self.task}: loss against time")
             write_json(os.path.join(self.dir, "log.json"), log)
-        write_json(os.path.join(self.dir, "metrics.json"), metrics)
+        write_json(os.path.join(self.dir, "metrics.json"), {**metrics, "peak_rss_mib": peak_rss_mib()})
         old = self.final + ".old"
         shutil.rmtree(old, ignore_errors=True)
         if os.path.exists(self.final):
