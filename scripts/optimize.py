@@ -22,6 +22,7 @@ def main(argv=None):
     ap.add_argument("--dataset", help="dataset folder (default: the one the run was fitted on)")
     ap.add_argument("--steps", type=int, help="optimisation steps (optimised tasks)")
     ap.add_argument("--resume", action="store_true", help="continue RUN/<task>.partial from its checkpoint")
+    ap.add_argument("--checkpoint-every", type=int, default=100, help="steps between checkpoints")
     ap.add_argument("--composition", help="paper, c2, c3, c4 or density")
     ap.add_argument("--scale", type=float)
     ap.add_argument("--rotate", help="AXIS:DEG, e.g. y:30")
@@ -36,7 +37,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
     from mi_voldis.tasks import run_task
-    options = {"steps": args.steps, "resume": args.resume, "composition": args.composition, "scale": args.scale,
+    options = {"steps": args.steps, "resume": args.resume, "checkpoint_every": args.checkpoint_every,
+               "composition": args.composition, "scale": args.scale,
                "rotate": args.rotate, "translate": args.translate, "pivot": args.pivot,
                "use_dataset_transform": args.dataset_transform, "prompt": args.prompt, "clip_model": args.clip_model,
                "seed": args.seed, "progress": not args.quiet}

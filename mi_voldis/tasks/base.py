@@ -192,11 +192,11 @@ class TaskOutput:
         return self.final
 
 
-def run_optimisation(output, problem, adam, steps, desc, resume=False, progress=True, checkpoint_every=100,
-                     final_ratio=0.1):
-    """Optimise ``problem`` with checkpoints in ``output`` (resumable after a crash or kill -9)."""
+def run_optimisation(output, problem, adam, steps, desc, options, final_ratio=0.1):
+    """Optimise ``problem`` with checkpoints in ``output`` every ``options["checkpoint_every"]`` steps
+    (default 100), resumable after a crash or kill -9 (``options["resume"]``)."""
     start, log = 0, []
-    if resume:
+    if options.get("resume"):
         loaded = output.checkpoint.load()
         if loaded is not None:
             arrays, meta = loaded
@@ -212,5 +212,6 @@ def run_optimisation(output, problem, adam, steps, desc, resume=False, progress=
         arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
         output.checkpoint.save(arrays, {"step": step, "log": log, "adam_t": t})
 
-    optimize(problem, adam, steps, start, final_ratio, log, desc, save, checkpoint_every, progress=progress)
+    optimize(problem, adam, steps, start, final_ratio, log, desc, save, int(options.get("checkpoint_every") or 100),
+             progress=options.get("progress", True))
     return log

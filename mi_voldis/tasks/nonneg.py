@@ -38,7 +38,7 @@ def run(run, output, options):
     problem = EditProblem(run, integ, ["residual.density", "residual.color"], ("full", "bg", "res"), loss_fn,
                           pool=pixels_near_object(run), seed=int(options.get("seed") or 0))
     log = run_optimisation(output, problem, Adam({"residual.density": 0.1, "residual.color": LR}), steps,
-                           "nonneg", options.get("resume"), options.get("progress", True))
+                           "nonneg", options)
     views = list(run.dataset.test)
     rows = []
     for v in views:

@@ -53,7 +53,7 @@ def camouflage(run, output, options):
     problem = EditProblem(run, integ, ["fg_color.color"], ("composite", "bg"), loss_fn,
                           pool=pixels_near_object(run), seed=int(options.get("seed") or 0))
     log = run_optimisation(output, problem, Adam({"fg_color.color": LR}), steps, "camouflage",
-                           options.get("resume"), options.get("progress", True))
+                           options)
     after = depth_and_errors(run, integ, views)
     output.write_views(integ)
     output.write_scene({**run.fields, "fg_color": cam}, {"composition": rule})
@@ -86,7 +86,7 @@ def semantic(run, output, options):
     views = list(run.dataset.test)
     sim_before = problem.similarity(views)
     log = run_optimisation(output, problem, Adam({"fg_color.color": LR}), steps, "semantic",
-                           options.get("resume"), options.get("progress", True))
+                           options)
     sim_after = problem.similarity(views)
     output.write_views(integ)
     output.write_scene({**run.fields, "fg_color": cam}, {"composition": integ.composition})
