@@ -61,7 +61,7 @@ TABLETOP_CONFIGS = {  # name: --set overrides of the fitting configuration
     "128 vox, 0.5 step (default)": [],
     "160 vox, 0.5 step": ["resolution_schedule=[[0,48],[250,96],[500,160]]"],
     "128 vox, 1.0 step": ["step_voxels=1.0"],
-    "128 vox, 0.5 step, SH degree 0 (not chosen)": ["sh_degree=0"],
+    "128 vox, 0.5 step, SH degree 1 (forced)": ["sh_degree=1"],
 }
 FERN_CONFIGS = {"192 vox (NDC), 0.5 step": ["resolution_schedule=[[0,64],[300,128],[700,192]]", "steps_full=1400",
                                             "tighten_at_step=300"]}

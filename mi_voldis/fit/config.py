@@ -29,8 +29,9 @@ class FitConfig:
     # ---- initialisation
     density_init_alpha: float = 1e-3  # initial opacity of one sample step (softplus-shifted, like DVGO)
     sh_degree: str = "auto"           # 0, 1, or "auto": degree 1 only if it pays on validation views
-    sh_gain_db: float = 1.0           # "auto": validation PSNR degree 1 must gain over degree 0 (it costs
-                                      # about 3x per step: 4x the bytes per lookup, 4x the channels)
+    sh_gain_db: float = 2.0           # "auto": validation PSNR degree 1 must gain over degree 0. It costs:
+                                      # on the tabletop (bench, 128 vox) 176 s vs 65 s, 1774 vs 612 MiB, and
+                                      # foreground coverage IoU 0.73 vs 0.90 for +1.2 dB held out (+1.4 val)
     sh_trial_steps: int = 100         # "auto": colour-only steps of each degree's trial fit
 
     # ---- regularisers (weights on per-vertex means; gradients added directly to the grids)
