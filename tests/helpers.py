@@ -1,4 +1,9 @@
-"""Shared helpers: tiny scenes with analytic answers."""
+"""Shared helpers: tiny scenes with analytic answers; killing a job after a checkpoint."""
+import json
+import os
+import signal
+import time
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -71,3 +76,21 @@ def check_gradient(params, key, loss, n_entries=4, eps=3e-3, rtol=0.02, seed=0):
     params[key] = mi.TensorXf(base)
     params.update()
     return grad
+
+
+def kill_after_checkpoint(proc, checkpoint, step, timeout=120):
+    """SIGKILL ``proc`` once its ``checkpoint`` (.npz with a JSON ``__meta__``) has reached ``step``."""
+    deadline = time.time() + timeout
+    while time.time() < deadline and proc.poll() is None:
+        if os.path.exists(checkpoint):
+            try:
+                with np.load(checkpoint) as f:
+                    reached = json.loads(bytes(f["__meta__"]).decode())["step"]
+            except (OSError, ValueError, KeyError):  # caught while being replaced: look again
+                reached = 0
+            if reached >= step:
+                break
+        time.sleep(0.02)
+    assert proc.poll() is None, "the job finished before it could be killed"
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()

@@ -1,15 +1,14 @@
 """Fitting: what a run writes, that it renders from its own scene.xml, resume after kill -9, config."""
 import json
 import os
-import signal
 import subprocess
 import sys
-import time
 
 import mitsuba as mi
 import numpy as np
 import pytest
 from conftest import ROOT, TINY_FIT
+from helpers import kill_after_checkpoint
 
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.render.views import render_camera
@@ -86,18 +85,7 @@ def test_resume_after_kill(tiny_dataset, tmp_path):
     os.makedirs(out)
     (out / "keep.txt").write_text("an earlier run")
     proc = subprocess.Popen(args + ["--out", str(out)] + sets, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    ckpt = tmp_path / "run.partial" / "checkpoints" / "last.npz"
-    deadline = time.time() + 120
-    while time.time() < deadline and proc.poll() is None:
-        if ckpt.exists():
-            with np.load(ckpt) as f:
-                step = json.loads(bytes(f["__meta__"]).decode())["step"]
-            if step >= 15:
-                break
-        time.sleep(0.05)
-    assert proc.poll() is None, "the fit finished before it could be killed"
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
+    kill_after_checkpoint(proc, tmp_path / "run.partial" / "checkpoints" / "last.npz", 15)
     assert (out / "keep.txt").exists() and not (out / "metrics.json").exists()  # old run intact
     run = subprocess.run(args + ["--out", str(out), "--resume"] + sets, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr

@@ -104,12 +104,11 @@ def test_task_resumes_after_kill(tiny_run, tmp_path):
     """kill -9 a camouflage run after a checkpoint, resume it: every step is done exactly once, the
     result follows an uninterrupted run's, and the earlier output stays whole until the new one is."""
     import shutil
-    import signal
     import subprocess
     import sys
-    import time
 
     from conftest import ROOT
+    from helpers import kill_after_checkpoint
     runs = {name: tmp_path / name for name in ("ref", "killed")}
     for path in runs.values():
         shutil.copytree(tiny_run, path, ignore=shutil.ignore_patterns("camouflage*"))
@@ -119,21 +118,7 @@ def test_task_resumes_after_kill(tiny_run, tmp_path):
     os.makedirs(runs["killed"] / "camouflage")
     (runs["killed"] / "camouflage" / "keep.txt").write_text("an earlier result")
     proc = subprocess.Popen(args + [str(runs["killed"])], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    ckpt = runs["killed"] / "camouflage.partial" / "checkpoints" / "last.npz"
-    deadline = time.time() + 120
-    while time.time() < deadline and proc.poll() is None:
-        if ckpt.exists():
-            try:
-                with np.load(ckpt) as f:
-                    step = json.loads(bytes(f["__meta__"]).decode())["step"]
-            except (OSError, ValueError, KeyError):  # caught mid-rename: try again
-                step = 0
-            if step >= 10:
-                break
-        time.sleep(0.02)
-    assert proc.poll() is None, "the task finished before it could be killed"
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
+    kill_after_checkpoint(proc, runs["killed"] / "camouflage.partial" / "checkpoints" / "last.npz", 10)
     assert (runs["killed"] / "camouflage" / "keep.txt").exists()
     done = subprocess.run(args + [str(runs["killed"]), "--resume"], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
