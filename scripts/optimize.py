@@ -22,7 +22,7 @@ def main(argv=None):
     ap.add_argument("--dataset", help="dataset folder (default: the one the run was fitted on)")
     ap.add_argument("--steps", type=int, help="optimisation steps (optimised tasks)")
     ap.add_argument("--resume", action="store_true", help="continue RUN/<task>.partial from its checkpoint")
-    ap.add_argument("--checkpoint-every", type=int, default=100, help="steps between checkpoints")
+    ap.add_argument("--checkpoint-every", type=int, help="steps between checkpoints (default 100)")
     ap.add_argument("--composition", help="paper, c2, c3, c4 or density")
     ap.add_argument("--scale", type=float)
     ap.add_argument("--rotate", help="AXIS:DEG, e.g. y:30")

@@ -98,6 +98,11 @@ def test_unknown_task_and_missing_run(tiny_run, tmp_path):
         run_task(str(tmp_path), "removal")
     with pytest.raises(ValueError, match="--prompt"):
         run_task(tiny_run, "semantic", {"progress": False})
+    before = sorted(os.listdir(tiny_run))
+    for key in ("steps", "checkpoint_every"):
+        with pytest.raises(ValueError, match=f"{key} must be at least 1, got 0"):
+            run_task(tiny_run, "camouflage", {key: 0, "progress": False})
+    assert sorted(os.listdir(tiny_run)) == before  # refused before anything was written
 
 
 def test_task_resumes_after_kill(tiny_run, tmp_path):

@@ -34,24 +34,17 @@ def make_integrator(resolution, samples, channels=3, fields=("full",), seed=0):
     return integ, [f"{role}.{k}" for role in fields for k in ("density", "color")]
 
 
-def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, warmup=2):
-    """Seconds per forward and per training step (forward + backward + Adam) and million samples
-    (points where the fields are evaluated) per second of each."""
+def trainer(resolution, samples, channels=3, fields=("full",)):
+    """(integrator, step function): ``step(batch, seed)`` runs one training step (forward, backward,
+    Adam) on random rays and returns the samples evaluated."""
     integ, keys = make_integrator(resolution, samples, channels, fields)
     params = mi.traverse(integ)
     adam = Adam({k: 1e-2 for k in keys})
     target = mi.Color3f(0.5, 0.4, 0.3)
     layers = tuple(k.split(".")[0] for k in keys[::2])
 
-    def forward(step):
-        o, d, u = random_rays(batch, step)
-        with dr.suspend_grad():
-            out = render_rays(integ, o, d, u, layers=layers)
-            dr.eval(out)
-        return float(dr.sum(out["evaluated"])[0])
-
-    def train(step):
-        o, d, u = random_rays(batch, step)
+    def step(batch, seed):
+        o, d, u = random_rays(batch, seed)
         for k in keys:
             dr.enable_grad(params[k])
         params.update()
@@ -62,9 +55,24 @@ def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, w
         params.update()
         dr.eval(params)
         return float(dr.sum(out["evaluated"])[0])
+    return integ, step
+
+
+def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, warmup=2):
+    """Seconds per forward and per training step (forward + backward + Adam) and million samples
+    (points where the fields are evaluated) per second of each."""
+    integ, train_step = trainer(resolution, samples, channels, fields)
+    layers = tuple(dict.fromkeys(fields))
+
+    def forward(step):
+        o, d, u = random_rays(batch, step)
+        with dr.suspend_grad():
+            out = render_rays(integ, o, d, u, layers=layers)
+            dr.eval(out)
+        return float(dr.sum(out["evaluated"])[0])
 
     result = {}
-    for name, fn in (("forward", forward), ("train", train)):
+    for name, fn in (("forward", forward), ("train", lambda step: train_step(batch, step))):
         for k in range(warmup):
             fn(k)
         dr.sync_thread()
@@ -74,3 +82,33 @@ def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, w
         seconds = (time.perf_counter() - t) / steps
         result[name] = {"seconds": seconds, "msps": evaluated / steps / seconds / 1e6}
     return result
+
+
+def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3):
+    """Where a training step's time goes, from Dr.Jit's kernel history (median ms over ``steps``):
+    the primal march kernel, the adjoint march kernel (the two kernels of ``batch`` threads), every
+    other kernel (packing, gradients, Adam), and the step's wall-clock time."""
+    _, train_step = trainer(resolution, samples)
+    for k in range(warmup):
+        train_step(batch, k)
+    dr.sync_thread()
+    flag = dr.flag(dr.JitFlag.KernelHistory)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    rows = []
+    try:
+        for k in range(steps):
+            dr.kernel_history()  # drop what came before
+            t = time.perf_counter()
+            evaluated = train_step(batch, warmup + k)
+            dr.sync_thread()
+            wall = 1e3 * (time.perf_counter() - t)
+            kernels = [h for h in dr.kernel_history() if "execution_time" in h]
+            march = [h["execution_time"] for h in kernels
+                     if h["size"] == batch and h["type"] == dr.KernelType.JIT]
+            total = sum(h["execution_time"] for h in kernels)
+            primal, adjoint = march  # the only kernels as wide as the batch
+            rows.append({"primal_ms": primal, "adjoint_ms": adjoint, "other_kernels_ms": total - primal - adjoint,
+                         "step_ms": wall, "msps": evaluated / wall / 1e3})
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, flag)
+    return {key: float(np.median([r[key] for r in rows])) for key in rows[0]}

@@ -29,9 +29,11 @@ class FitConfig:
     # ---- initialisation
     density_init_alpha: float = 1e-3  # initial opacity of one sample step (softplus-shifted, like DVGO)
     sh_degree: str = "auto"           # 0, 1, or "auto": degree 1 only if it pays on validation views
-    sh_gain_db: float = 2.0           # "auto": validation PSNR degree 1 must gain over degree 0. It costs:
-                                      # on the tabletop (bench, 128 vox) 176 s vs 65 s, 1774 vs 612 MiB, and
-                                      # foreground coverage IoU 0.73 vs 0.90 for +1.2 dB held out (+1.4 val)
+    sh_gain_db: float = 2.0           # "auto": validation PSNR degree 1 must gain over degree 0. Tabletop,
+                                      # 128 vox, full bench of 2026-11-22 09:30 (since replaced): degree 1
+                                      # (auto at 1 dB) 176 s, 1774 MiB, fg coverage IoU 0.73, +1.2 dB held
+                                      # out, vs degree 0 65 s, 612 MiB, 0.90; reports/bench.md has a
+                                      # degree-1 row (forced from the start)
     sh_trial_steps: int = 100         # "auto": colour-only steps of each degree's trial fit
 
     # ---- regularisers (weights on per-vertex means; gradients added directly to the grids)

@@ -17,6 +17,9 @@ def run_task(run_dir, task, options=None, dataset=None):
     if task not in TASKS:
         raise ValueError(f"unknown task '{task}' (expected one of {', '.join(TASKS)})")
     options = dict(options or {})
+    for key in ("steps", "checkpoint_every"):  # checked before anything is read or written
+        if options.get(key) is not None and int(options[key]) < 1:
+            raise ValueError(f"{key} must be at least 1, got {options[key]}")
     run = FittedRun(run_dir, dataset)
     output = TaskOutput(run, task, resume=bool(options.get("resume")))
     return TASKS[task](run, output, options)

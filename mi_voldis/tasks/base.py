@@ -195,6 +195,7 @@ class TaskOutput:
 def run_optimisation(output, problem, adam, steps, desc, options, final_ratio=0.1):
     """Optimise ``problem`` with checkpoints in ``output`` every ``options["checkpoint_every"]`` steps
     (default 100), resumable after a crash or kill -9 (``options["resume"]``)."""
+    every = int(options.get("checkpoint_every") or 100)
     start, log = 0, []
     if options.get("resume"):
         loaded = output.checkpoint.load()
@@ -212,6 +213,5 @@ def run_optimisation(output, problem, adam, steps, desc, options, final_ratio=0.
         arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
         output.checkpoint.save(arrays, {"step": step, "log": log, "adam_t": t})
 
-    optimize(problem, adam, steps, start, final_ratio, log, desc, save, int(options.get("checkpoint_every") or 100),
-             progress=options.get("progress", True))
+    optimize(problem, adam, steps, start, final_ratio, log, desc, save, every, progress=options.get("progress", True))
     return log
