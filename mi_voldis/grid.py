@@ -52,14 +52,7 @@ class _Pack(dr.CustomOp):
         return np.cumsum([0] + [s[3] for s in self.shapes])[:-1].tolist()
 
     def backward(self):
-        grad = self.grad_out()
-        grads = []
-        for offset, shape in zip(self._offsets(), self.shapes):
-            c = shape[3]
-            index = dr.arange(mi.UInt32, int(np.prod(shape)))
-            grads.append(mi.TensorXf(dr.gather(mi.Float, grad, (index // c) * self.width + index % c + offset),
-                                     shape))
-        self.set_grad_in("tensors", grads)
+        self.set_grad_in("tensors", unpack(self.grad_out(), [s[3] for s in self.shapes], self.shapes[0][:3]))
 
 
 def pack(tensors):
@@ -68,6 +61,20 @@ def pack(tensors):
     Vertex v's channels land at ``[v * W, v * W + sum C_k)`` with ``W = packet_width(sum C_k)``;
     the padding is zero. Differentiable: gradients of the result flow back to every tensor."""
     return dr.custom(_Pack, list(tensors))
+
+
+def unpack(packed, channels, zyx):
+    """Inverse of :func:`pack`: (Z, Y, X, C_k) tensors of ``channels`` = [C_k] from a packed array
+    (one gather each; not differentiable)."""
+    width = packet_width(sum(channels))
+    out, offset = [], 0
+    for c in channels:
+        n = int(np.prod(zyx)) * c
+        index = dr.arange(mi.UInt32, n)
+        values = dr.gather(mi.Float, dr.detach(packed), (index // c) * width + index % c + offset)
+        out.append(mi.TensorXf(values, (*zyx, c)))
+        offset += c
+    return out
 
 
 def trilinear(data, shape, width, channels, p, active=True):

@@ -1,7 +1,7 @@
 """Speed against error, side by side, in one command.
 
     python scripts/bench.py [--quick] [--work out/bench] [--report reports]
-    python scripts/bench.py --step-profile      (where one training step's time goes; prints JSON)
+    python scripts/bench.py --step-profile [--rays random|tiles]   (one training step by kernel; JSON)
 
 Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
 PNG plots. --quick is a smoke run of a few minutes; the full run takes under an hour on 2 cores.
@@ -18,6 +18,8 @@ def main(argv=None):
     ap.add_argument("--report", default="reports", help="where bench.md and the plots go")
     ap.add_argument("--step-profile", action="store_true",
                     help="only profile one training step (128^3, 128 samples/ray, 16k rays) by kernel")
+    ap.add_argument("--rays", default="random", choices=("random", "tiles"),
+                    help="--step-profile: random rays or fitting's tiled batches")
     ap.add_argument("--variant", default="llvm_ad_rgb")
     args = ap.parse_args(argv)
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
@@ -25,7 +27,7 @@ def main(argv=None):
         import json
 
         from mi_voldis.bench.throughput import step_profile
-        print(json.dumps(step_profile(), indent=1))
+        print(json.dumps(step_profile(rays=args.rays), indent=1))
         return
     from mi_voldis.bench import report
     from mi_voldis.bench.run import run_all

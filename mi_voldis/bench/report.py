@@ -2,6 +2,7 @@
 import os
 import shutil
 
+from . import rays
 from .machine import BYTES_FORWARD, BYTES_TRAIN
 from .run import msps_bound, time_to_within
 
@@ -31,19 +32,25 @@ def write(results, report_dir, command):
 def _throughput(results):
     bw = results["bandwidth"]
     fwd_bound, train_bound = msps_bound(bw["drjit_gbs"], BYTES_FORWARD), msps_bound(bw["drjit_gbs"], BYTES_TRAIN)
-    md = ["## 1. Ray-marcher throughput (density + RGB grid, random rays)", "",
+    tile = rays.TILE
+    md = ["## 1. Ray-marcher throughput (density + RGB grid)", "",
           f"Memory bandwidth (large copy): {bw['drjit_gbs']:.1f} GB/s with Dr.Jit on all cores, "
           f"{bw['numpy_gbs']:.1f} GB/s with NumPy on one. A sample touches {BYTES_FORWARD} B forward "
           f"(8 corners x 4 floats) and about {BYTES_TRAIN} B in training (lookup, adjoint lookup, gradient "
           f"read-modify-write): bounds of {fwd_bound:.0f} and {train_bound:.0f} Msps.", "",
-          "PyTorch (the same model with `grid_sample`, `mi_voldis/bench/torch_reference.py`) runs on the rows with "
-          "128 samples per ray (its steps take seconds; all 27 rows would not fit the hour).", "",
-          "| grid | samples/ray | rays | voldis fwd Msps | voldis train Msps | % of bound | torch fwd Msps | "
-          "torch train Msps | train ratio |", "|---|---|---|---|---|---|---|---|---|"]
+          "Rays (`mi_voldis/bench/rays.py`): *random* rays, each independent of its neighbours, and *tiles*, "
+          f"coherent rays: {tile} x {tile} pixel tiles of random views, whose rays march side by side through the "
+          "same cells (as in a rendered view, or fitting with `batch_tile=4`; section 2 shows what that does to "
+          "fitting). The training step is fitting's (Adam on the packed grids). PyTorch (the same model with "
+          "`grid_sample`, `mi_voldis/bench/torch_reference.py`) runs on the same rays in the rows with 128 samples "
+          "per ray (its steps take seconds; all rows would not fit the hour).", "",
+          "| grid | samples/ray | batch | rays | voldis fwd Msps | voldis train Msps | % of bound | torch fwd Msps | "
+          "torch train Msps | train ratio |", "|---|---|---|---|---|---|---|---|---|---|"]
     for row in results["throughput"]:
         v, t = row["voldis"], row.get("torch")
         ratio = v["train"]["msps"] / t["train"]["msps"] if t else None
-        md.append(f"| {row['resolution']}^3 | {row['samples']} | {row['batch']} | {v['forward']['msps']:.1f} | "
+        md.append(f"| {row['resolution']}^3 | {row['samples']} | {row['batch']} | {row.get('rays', 'random')} | "
+                  f"{v['forward']['msps']:.1f} | "
                   f"{v['train']['msps']:.1f} | {100 * v['train']['msps'] / train_bound:.0f}% | "
                   f"{_f(t and t['forward']['msps'])} | {_f(t and t['train']['msps'], 2)} | {_f(ratio)}x |")
     return md + [""]

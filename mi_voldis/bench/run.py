@@ -18,7 +18,7 @@ import subprocess
 import sys
 import time
 
-from . import content, machine, throughput
+from . import content, machine, rays, throughput
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SHARED = os.path.join(os.path.dirname(ROOT), "shared", "data")
@@ -37,21 +37,23 @@ def child(args, log_file=None):
 
 # ------------------------------------------------------------------------------------ 1. throughput
 def run_throughput(quick):
-    grid = [(128, 128, 16384)] if quick else [(r, n, b) for r in (64, 128, 256) for n in (64, 128, 256)
-                                              for b in (4096, 16384, 65536)]
-    torch_rows = {(128, 128, 16384)} if quick else {(r, 128, b) for r in (64, 128, 256) for b in (4096, 16384, 65536)}
+    """Rows (resolution, samples, batch, ray kind): every combination on random rays, and the rows
+    with 128 samples per ray also on tiled (coherent) rays; PyTorch on the rows with 128 samples."""
+    sizes = [(128, 128, 16384)] if quick else [(r, n, b) for r in (64, 128, 256) for n in (64, 128, 256)
+                                               for b in (4096, 16384, 65536)]
     try:
         from . import torch_reference
     except ImportError:
         torch_reference = None
     rows = []
-    for r, n, b in grid:
-        heavy = r == 256 or b == 65536
-        row = {"resolution": r, "samples": n, "batch": b,
-               "voldis": throughput.measure(r, n, b, steps=3 if heavy else 5)}
-        if torch_reference is not None and (r, n, b) in torch_rows:
-            row["torch"] = torch_reference.measure(r, n, b, steps=2 if heavy else 4, warmup=1)
-        rows.append(row)
+    for r, n, b in sizes:
+        for kind in rays.KINDS if n == 128 else ("random",):
+            heavy = r == 256 or b == 65536
+            row = {"resolution": r, "samples": n, "batch": b, "rays": kind,
+                   "voldis": throughput.measure(r, n, b, steps=3 if heavy else 5, rays=kind)}
+            if torch_reference is not None and n == 128:
+                row["torch"] = torch_reference.measure(r, n, b, steps=2 if heavy else 4, warmup=1, rays=kind)
+            rows.append(row)
     return rows
 
 
@@ -61,6 +63,7 @@ TABLETOP_CONFIGS = {  # name: --set overrides of the fitting configuration
     "128 vox, 0.5 step (default)": [],
     "160 vox, 0.5 step": ["resolution_schedule=[[0,48],[250,96],[500,160]]"],
     "128 vox, 1.0 step": ["step_voxels=1.0"],
+    "128 vox, 0.5 step, 4 x 4 ray tiles": ["batch_tile=4"],
     "128 vox, 0.5 step, SH degree 1 (forced)": ["sh_degree=1"],
 }
 FERN_CONFIGS = {"192 vox (NDC), 0.5 step": ["resolution_schedule=[[0,64],[300,128],[700,192]]", "steps_full=1400",

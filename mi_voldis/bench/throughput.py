@@ -1,8 +1,8 @@
 """Ray-marcher throughput: samples per second of the voldis march, forward and forward+backward+Adam.
 
-Rays start on a sphere of radius 3 around the unit box [-1, 1]^3 and aim at random points inside it,
-like training rays drawn across many views; the field is a random density+colour grid. A "sample" is
-one point on a ray where the fields are evaluated (rays x samples per ray).
+Rays (:mod:`.rays`: ``random`` or fitting's ``tiles``) cross the box [-1, 1]^3 holding a random
+density+colour grid. A "sample" is one point on a ray where the fields are evaluated (rays x samples
+per ray). The training step is fitting's: Adam on the packed grids (:class:`PackedParameters`).
 """
 import time
 
@@ -11,61 +11,57 @@ import mitsuba as mi
 import numpy as np
 
 from ..fieldspec import box_transform, field_dict
+from ..fit.problem import PackedParameters
 from ..optim.adam import Adam
 from ..render.rays import render_rays
+from .rays import bench_rays
 
 
-def random_rays(n, seed):
-    rng = np.random.default_rng(seed)
-    v = rng.normal(size=(n, 3))
-    o = 3.0 * v / np.linalg.norm(v, axis=1, keepdims=True)
-    d = rng.uniform(-0.8, 0.8, (n, 3)) - o
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    return mi.Point3f(*o.T), mi.Vector3f(*d.T), mi.Float(rng.uniform(0, 1, n))
+def device_rays(kind, n, seed):
+    o, d, u = bench_rays(kind, n, seed)
+    return mi.Point3f(*o.T), mi.Vector3f(*d.T), mi.Float(u)
 
 
-def make_integrator(resolution, samples, channels=3, fields=("full",), seed=0):
+def make_integrator(resolution, samples, channels=3, seed=0):
     rng = np.random.default_rng(seed)
     box = box_transform([-1, -1, -1], [1, 1, 1])
     shape = (resolution,) * 3
     specs = {role: field_dict(rng.normal(-1, 1, shape + (1,)), rng.normal(0, 1, shape + (channels,)), box)
              for role in ("full", "bg")}
-    integ = mi.load_dict({"type": "voldis", "samples": samples, **specs}, optimize=False)
-    return integ, [f"{role}.{k}" for role in fields for k in ("density", "color")]
+    return mi.load_dict({"type": "voldis", "samples": samples, **specs}, optimize=False)
 
 
-def trainer(resolution, samples, channels=3, fields=("full",)):
-    """(integrator, step function): ``step(batch, seed)`` runs one training step (forward, backward,
-    Adam) on random rays and returns the samples evaluated."""
-    integ, keys = make_integrator(resolution, samples, channels, fields)
-    params = mi.traverse(integ)
-    adam = Adam({k: 1e-2 for k in keys})
+def trainer(resolution, samples, channels=3, fields=("full",), rays="random"):
+    """(integrator, step function): ``step(batch, seed)`` runs one training step as fitting does
+    (forward, backward, Adam on the packed grids) on fresh ``rays`` and returns the samples evaluated."""
+    integ = make_integrator(resolution, samples, channels)
+    params = PackedParameters({role: integ.fields[role] for role in fields})
+    adam = Adam({key: 1e-2 for key in params})
     target = mi.Color3f(0.5, 0.4, 0.3)
-    layers = tuple(k.split(".")[0] for k in keys[::2])
 
     def step(batch, seed):
-        o, d, u = random_rays(batch, seed)
-        for k in keys:
-            dr.enable_grad(params[k])
+        o, d, u = device_rays(rays, batch, seed)
+        for key in params:
+            dr.enable_grad(params[key])
         params.update()
-        out = render_rays(integ, o, d, u, layers=layers)
-        loss = sum(dr.mean(dr.square(out[lay][0] - target)) for lay in layers)
+        out = render_rays(integ, o, d, u, layers=fields)
+        loss = sum(dr.mean(dr.square(out[lay][0] - target)) for lay in fields)
         dr.backward(loss)
-        adam.step(params, {k: dr.grad(params[k]).array for k in keys})
+        adam.step(params, {key: dr.grad(params[key]) for key in params})
         params.update()
         dr.eval(params)
         return float(dr.sum(out["evaluated"])[0])
     return integ, step
 
 
-def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, warmup=2):
+def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, warmup=2, rays="random"):
     """Seconds per forward and per training step (forward + backward + Adam) and million samples
     (points where the fields are evaluated) per second of each."""
-    integ, train_step = trainer(resolution, samples, channels, fields)
+    integ, train_step = trainer(resolution, samples, channels, fields, rays)
     layers = tuple(dict.fromkeys(fields))
 
     def forward(step):
-        o, d, u = random_rays(batch, step)
+        o, d, u = device_rays(rays, batch, step)
         with dr.suspend_grad():
             out = render_rays(integ, o, d, u, layers=layers)
             dr.eval(out)
@@ -84,11 +80,11 @@ def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, w
     return result
 
 
-def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3):
+def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, rays="random"):
     """Where a training step's time goes, from Dr.Jit's kernel history (median ms over ``steps``):
     the primal march kernel, the adjoint march kernel (the two kernels of ``batch`` threads), every
     other kernel (packing, gradients, Adam), and the step's wall-clock time."""
-    _, train_step = trainer(resolution, samples)
+    _, train_step = trainer(resolution, samples, rays=rays)
     for k in range(warmup):
         train_step(batch, k)
     dr.sync_thread()

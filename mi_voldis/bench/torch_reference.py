@@ -20,6 +20,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from .rays import bench_rays
+
 
 class TorchGridField:
     """Raw grid ``grid`` (1, 4, Z, Y, X) over the box [lo, hi] with the density scale."""
@@ -72,16 +74,9 @@ def render(field, o, d, u, n_samples):
     return rgb, w.sum(dim=1)
 
 
-def random_rays(n, seed):
-    """The Dr.Jit benchmark's rays (``throughput.random_rays``, same NumPy draws) as float32 tensors:
-    origins on the sphere of radius 3 aimed at uniform points of [-0.8, 0.8]^3, and jitters."""
-    rng = np.random.default_rng(seed)
-    v = rng.normal(size=(n, 3))
-    o = 3.0 * v / np.linalg.norm(v, axis=1, keepdims=True)
-    d = rng.uniform(-0.8, 0.8, (n, 3)) - o
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    u = rng.uniform(0, 1, n)
-    return tuple(torch.from_numpy(a.astype(np.float32)) for a in (o, d, u))
+def torch_rays(kind, n, seed):
+    """The Dr.Jit benchmark's rays (:func:`mi_voldis.bench.rays.bench_rays`, same draws) as tensors."""
+    return tuple(torch.from_numpy(a) for a in bench_rays(kind, n, seed))
 
 
 def random_field(resolution, seed=0):
@@ -93,7 +88,7 @@ def random_field(resolution, seed=0):
     return TorchGridField.from_numpy(density, color, [-1.0] * 3, [1.0] * 3)
 
 
-def measure(resolution, samples, batch, steps=5, warmup=2, threads=None):
+def measure(resolution, samples, batch, steps=5, warmup=2, threads=None, rays="random"):
     """Seconds per forward (no grad) and per training step (forward + backward + Adam, lr 1e-2, MSE to
     the colour (0.5, 0.4, 0.3)) and their million samples (rays x samples per ray) per second. As in
     ``throughput.measure``, each step draws fresh rays and the timing includes drawing them."""
@@ -105,11 +100,11 @@ def measure(resolution, samples, batch, steps=5, warmup=2, threads=None):
 
     def forward(step):
         with torch.no_grad():
-            render(field, *random_rays(batch, step), samples)
+            render(field, *torch_rays(rays, batch, step), samples)
 
     def train(step):
         opt.zero_grad(set_to_none=True)
-        rgb, _ = render(field, *random_rays(batch, step), samples)
+        rgb, _ = render(field, *torch_rays(rays, batch, step), samples)
         torch.mean(torch.square(rgb - target)).backward()
         opt.step()
 

@@ -15,29 +15,60 @@ from . import grids
 from .raybank import RayBank
 
 
+class PackedParameters(dict):
+    """The fields' packed grids as the optimised parameters, ``{"role.packed": Float}``.
+
+    Adam steps on the very arrays the march reads: a step neither packs density and colour tensors
+    nor unpacks their gradients (at 128^3 that is three passes over 32 MB per field and step).
+    ``update()`` hands changed arrays back to the fields; ``slot_rates`` gives Adam's per-channel
+    learning rates in the packed layout."""
+
+    def __init__(self, fields):
+        self.fields = dict(fields)
+        super().__init__({f"{r}.packed": f.packed for r, f in self.fields.items()})
+
+    def update(self):
+        for key, value in self.items():
+            field = self.fields[key.split(".")[0]]
+            if value is not field.packed:
+                field.set_packed(value)
+
+    def slot_rates(self, role, density, color):
+        """Learning rates of one packed vertex: ``density`` for channel 0, ``color`` for the colour
+        channels, 0 for the padding."""
+        f = self.fields[role]
+        return [density] + [color] * (f.channels - 1) + [0.0] * (f.width - f.channels)
+
+
 class FieldFit:
     """One fitting phase as a problem for :func:`optimize`: which fields, which layers, which rays."""
 
-    def __init__(self, ctx, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True):
+    def __init__(self, ctx, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
+                 rates=None):
         self.ctx, self.roles, self.layers, self.bank = ctx, roles, layers, bank
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
+        self.adam = ctx.adam if adam is None else adam
+        self.rates = (ctx.cfg.lr_density, ctx.cfg.lr_color) if rates is None else rates  # (density, colour)
         self.rebuild()
 
     # -- plumbing
     def rebuild(self):
         ctx = self.ctx
         self.integrator = ctx.build_integrator()
-        self.params = mi.traverse(self.integrator)
-        self.keys = [f"{r}.{k}" for r in self.roles for k in ("density", "color")]
+        self.params = PackedParameters({r: self.integrator.fields[r] for r in self.roles})
+        self.keys = list(self.params)
+        for r in self.roles:
+            self.adam.lrs[f"{r}.packed"] = self.params.slot_rates(r, *self.rates)
         self.samples = None  # the integrator's: at most max_samples, every step_size
         if ctx.occupancy_on:
             extra = ctx.hull_points if self.hull is not None else None
             self.integrator.update_occupancy(ctx.cfg.occupancy_resolution, ctx.occupancy_sigma(), extra)
 
     def sync_states(self):
+        self.params.update()
         for r in self.roles:
-            s = self.ctx.states[r]
-            s.density, s.color = self.params[f"{r}.density"], self.params[f"{r}.color"]
+            s, f = self.ctx.states[r], self.integrator.fields[r]
+            s.density, s.color = f.density, f.color
 
     # -- schedule
     def before_step(self, step):
@@ -50,7 +81,7 @@ class FieldFit:
                 ctx.tighten(self.integrator)
             if upsample:
                 ctx.resample(self.roles, ctx.target_resolution(step))
-            ctx.adam.reset()
+            self.adam.reset()
             self.rebuild()
         elif ctx.occupancy_on and step % cfg.occupancy_every == 0 and step > 0:
             self.sync_states()
@@ -62,7 +93,7 @@ class FieldFit:
         ctx = self.ctx
         rng = np.random.default_rng([ctx.cfg.seed, self.phase, step])
         n = ctx.cfg.batch_rays
-        o, d, color, mask = self.bank.batch(rng, n, self.pool)
+        o, d, color, mask = self.bank.batch(rng, n, self.pool, ctx.cfg.batch_tile)
         out = render_rays(self.integrator, o, d, mi.Float(rng.random(n, np.float32)), self.layers, self.samples)
         behind = ctx.behind(rng, n)  # what shows through where a layer is not opaque
         loss = mi.Float(0.0)
@@ -80,19 +111,24 @@ class FieldFit:
         return loss, stats
 
     def extra_gradients(self, step, grads):
+        """Regularisers on the packed grids (channel 0 density, then colour; padding untouched):
+        sparsity on activated density, total variation every ``tv_every`` steps, and the hull mask."""
         cfg = self.ctx.cfg
         tv = cfg.tv_every if step % cfg.tv_every == 0 else 0.0
         for r in self.roles:
-            d, c = dr.detach(self.params[f"{r}.density"]), dr.detach(self.params[f"{r}.color"])
-            g_d = grads[f"{r}.density"] + (cfg.sparsity / dr.width(d.array)) * dr.rcp(1.0 + dr.exp(-d.array))
-            g_c = grads[f"{r}.color"]
-            if tv:
-                g_d = g_d + (tv * cfg.tv_density) * grids.laplacian(d)
-                g_c = g_c + (tv * cfg.tv_color) * grids.laplacian(c)
+            key, f = f"{r}.packed", self.integrator.fields[r]
+            values = dr.detach(self.params[key])
+            vertices = dr.width(values) // f.width
+            channel = dr.arange(mi.UInt32, dr.width(values)) % f.width
+            g = grads[key] + dr.select(channel == 0, (cfg.sparsity / vertices) * dr.rcp(1.0 + dr.exp(-values)), 0.0)
+            if tv:  # grids.laplacian averages over every slot: rescale to per-vertex means of each tensor
+                weights = ([cfg.tv_density * f.width] + [cfg.tv_color * f.width / (f.channels - 1)] * (f.channels - 1)
+                           + [0.0] * (f.width - f.channels))
+                weight = dr.gather(mi.Float, mi.Float(np.float32(weights) * tv), channel)
+                g = g + weight * grids.laplacian(mi.TensorXf(values, (*f.shape[::-1], f.width)))
             if self.hull is not None:  # refit only inside the hull
-                g_d = g_d * self.hull
-                g_c = g_c * dr.repeat(self.hull, c.shape[3])
-            grads[f"{r}.density"], grads[f"{r}.color"] = g_d, g_c
+                g = g * dr.repeat(self.hull, f.width)
+            grads[key] = g
         return grads
 
 

@@ -2,6 +2,10 @@
 
 Colours, masks and camera parameters live on the device; a batch is a set of pixel indices, turned
 into world rays there (a random position inside each pixel, as a box-filtered film integrates).
+
+A batch can come in t x t pixel tiles (each around a random pixel of a random view): the rays of a
+tile march side by side through the same cells, so the grid lookups of one SIMD packet share cache
+lines. Pixels are still drawn uniformly (up to clipping at image borders).
 """
 import drjit as dr
 import mitsuba as mi
@@ -34,10 +38,13 @@ class RayBank:
     def pixels(self):
         return len(self.views) * self.height * self.width
 
-    def batch(self, rng, n, pool=None):
+    def batch(self, rng, n, pool=None, tile=1):
         """Rays, colours and masks of ``n`` random pixels (of ``pool``, flat indices, when given), each
-        at a random position inside its pixel."""
-        idx = rng.integers(0, self.pixels, n) if pool is None else pool[rng.integers(0, len(pool), n)]
+        at a random position inside its pixel; ``tile`` > 1: in tiles of tile x tile pixels, each
+        around a random pixel (of ``pool``)."""
+        count = -(-n // (tile * tile))
+        anchors = rng.integers(0, self.pixels, count) if pool is None else pool[rng.integers(0, len(pool), count)]
+        idx = tile_pixels(rng, anchors, tile, self.height, self.width)[:n] if tile > 1 else anchors
         return self.rays(idx.astype(np.uint32), rng.random((n, 2), np.float32))
 
     def rays(self, index, jitter):
@@ -66,3 +73,15 @@ class RayBank:
         cam = self.cams[k]
         py, px = np.mgrid[0:self.height, 0:self.width]
         return pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
+
+
+def tile_pixels(rng, anchors, tile, height, width):
+    """Flat pixel indices (view * H * W + y * W + x) of ``tile`` x ``tile`` tiles, one per anchor pixel,
+    each at a random offset that contains its anchor, clipped to the image; row-major per tile."""
+    view, pixel = np.divmod(np.asarray(anchors, np.int64), height * width)
+    y0 = np.clip(pixel // width - rng.integers(0, tile, len(view)), 0, max(height - tile, 0))
+    x0 = np.clip(pixel % width - rng.integers(0, tile, len(view)), 0, max(width - tile, 0))
+    dy, dx = np.divmod(np.arange(tile * tile), tile)
+    y = np.minimum(y0[:, None] + dy, height - 1)
+    x = np.minimum(x0[:, None] + dx, width - 1)
+    return (view[:, None] * (height * width) + y * width + x).ravel()

@@ -25,8 +25,9 @@ def choose_sh_degree(ctx, roles, cfg):
             colour = grids.with_sh_degree(kept[r], degree).color
             ctx.states[r] = grids.FieldState(kept[r].density, dr.zeros(mi.TensorXf, colour.shape), kept[r].to_world,
                                              kept[r].density_scale)
-        trial = FieldFit(ctx, roles, ("full",), fit_bank, phase=10 + degree, schedule=False)
-        adam = Adam({f"{r}.color": cfg.lr_color * 2 for r in roles}, cfg.adam_beta1, cfg.adam_beta2)
+        adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2)
+        trial = FieldFit(ctx, roles, ("full",), fit_bank, phase=10 + degree, schedule=False, adam=adam,
+                         rates=(0.0, cfg.lr_color * 2))  # colour only: geometry stays fixed
         optimize(trial, adam, cfg.sh_trial_steps, final_ratio=0.3, desc=f"SH degree {degree} trial",
                  progress=ctx.progress)
         trial.sync_states()

@@ -48,10 +48,6 @@ def fit(dataset, run_dir, cfg, resume=False, progress=True):
     if meta is None:
         ctx.init_fields(roles, 0 if cfg.sh_degree in ("auto", 0, "0") else int(cfg.sh_degree))
 
-    lrs = {f"{r}.{k}": (cfg.lr_density if k == "density" else cfg.lr_color) for r in ("full", "bg")
-           for k in ("density", "color")}
-    ctx.adam.lrs = lrs
-
     def checkpoint(phase):
         return lambda step: ctx.save(phase, step)
 

@@ -3,7 +3,9 @@
     m <- b1 m + (1 - b1) g,   v <- b2 v + (1 - b2) g^2,
     x <- x - lr * (m / (1 - b1^t)) / (sqrt(v / (1 - b2^t)) + eps)
 
-The state (m, v, t) is plain tensors so that checkpoints can store and restore it exactly.
+The state (m, v, t) is plain arrays so that checkpoints can store and restore it exactly. Parameters
+are tensors or flat arrays; a learning rate is a number, or a list of rates applied periodically
+along the flat array (one per channel of an interleaved grid, see :mod:`mi_voldis.grid`).
 ``warmup``: the learning rate ramps up linearly over this many steps after a (re)start, so that the
 first, sign-like Adam steps after a grid is resampled do not jolt it.
 """
@@ -27,10 +29,10 @@ class Adam:
                 store.pop(key, None)
 
     def step(self, params, grads, scale=1.0):
-        """Update ``params[key]`` (TensorXf) with ``grads[key]`` (flat Float) for every key with a
-        learning rate; ``scale`` multiplies every learning rate (schedules)."""
+        """Update ``params[key]`` (TensorXf or Float) with ``grads[key]`` (flat Float) for every key
+        with a learning rate; ``scale`` multiplies every learning rate (schedules)."""
         for key, lr in self.lrs.items():
-            if lr == 0 or key not in grads or grads[key] is None:
+            if not np.any(lr) or key not in grads or grads[key] is None:
                 continue
             x = params[key]
             g = dr.detach(grads[key])
@@ -42,9 +44,17 @@ class Adam:
             self.m[key] = dr.fma(self.beta1, self.m[key], (1 - self.beta1) * g)
             self.v[key] = dr.fma(self.beta2, self.v[key], (1 - self.beta2) * dr.square(g))
             ramp = min(1.0, t / self.warmup) if self.warmup else 1.0
-            step = lr * scale * ramp * np.sqrt(1 - self.beta2 ** t) / (1 - self.beta1 ** t)
-            update = self.m[key] * (step / (dr.sqrt(self.v[key]) + self.eps * np.sqrt(1 - self.beta2 ** t)))
-            params[key] = mi.TensorXf(dr.detach(x.array) - update, x.shape)
+            step = float(scale * ramp * np.sqrt(1 - self.beta2 ** t) / (1 - self.beta1 ** t))
+            if np.ndim(lr):  # per-slot rates, periodic along the array
+                slot = dr.arange(mi.UInt32, dr.width(g)) % len(lr)
+                step = dr.gather(mi.Float, mi.Float(np.asarray(lr, np.float32)), slot) * step
+            else:
+                step = lr * step
+            update = self.m[key] * (step / (dr.sqrt(self.v[key]) + float(self.eps * np.sqrt(1 - self.beta2 ** t))))
+            if isinstance(x, mi.TensorXf):
+                params[key] = mi.TensorXf(dr.detach(x.array) - update, x.shape)
+            else:
+                params[key] = dr.detach(x) - update
             dr.schedule(params[key], self.m[key], self.v[key])
 
     def state(self):

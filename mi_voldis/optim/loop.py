@@ -2,7 +2,7 @@
 
 A *problem* says what is optimised and how (duck-typed):
 
-* ``params``: a ``mi.SceneParameters`` (or dict) holding the tensors; ``keys``: those to optimise;
+* ``params``: a ``mi.SceneParameters`` (or dict) holding the tensors or flat arrays; ``keys``: those to optimise;
 * ``loss(step)`` -> ``(loss, stats)``: a differentiable Dr.Jit scalar built from renders, and a dict of
   Python numbers for the log (e.g. PSNR, samples evaluated);
 * optional ``before_step(step)`` (schedules: resolution changes, occupancy updates),
@@ -42,6 +42,11 @@ class Checkpoint:
         return arrays, meta
 
 
+def _flat(array):
+    """The flat array of a tensor (flat arrays as they are)."""
+    return array.array if dr.is_tensor_v(array) else array
+
+
 def decay(step, steps, final_ratio):
     """Learning-rate factor: exponential from 1 at step 0 to ``final_ratio`` at the last step."""
     return final_ratio ** (step / max(steps - 1, 1))
@@ -67,7 +72,7 @@ def optimize(problem, adam, steps, start=0, final_ratio=0.1, log=None, desc="opt
         params.update()
         loss, stats = problem.loss(step)
         dr.backward(loss)
-        grads = {key: dr.grad(params[key]).array for key in problem.keys}
+        grads = {key: _flat(dr.grad(params[key])) for key in problem.keys}
         if hasattr(problem, "extra_gradients"):
             grads = problem.extra_gradients(step, grads)
         adam.step(params, grads, decay(step, steps, final_ratio))

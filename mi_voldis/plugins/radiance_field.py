@@ -100,8 +100,7 @@ class RadianceField(mi.Medium):
         self.density_scale = float(props.get("density_scale", 1.0))
         if not self.density_scale > 0:
             raise ValueError(f"{name}: density_scale must be positive, got {self.density_scale}")
-        self.density = density
-        self.color = color
+        self._density, self._color, self._packed = density, color, None
         self.parameters_changed()
 
     # ---------------------------------------------------------------- Mitsuba object protocol
@@ -126,8 +125,54 @@ class RadianceField(mi.Medium):
         self.sh_degree = SH_DEGREES[c.shape[3]]
         self.channels = 1 + c.shape[3]
         self.width = grid.packet_width(self.channels)
-        self.packed = grid.pack([d, c])
-        dr.eval(self.packed)
+        self._packed = None  # packed on first use: a step that sets both tensors packs them once
+
+    # ------------------------------------------------------------ values: tensors or packed
+    @property
+    def density(self):
+        """Raw density tensor (Z, Y, X, 1)."""
+        self._unpack()
+        return self._density
+
+    @density.setter
+    def density(self, value):
+        self._unpack()
+        self._density = value
+
+    @property
+    def color(self):
+        """Raw colour tensor (Z, Y, X, C)."""
+        self._unpack()
+        return self._color
+
+    @color.setter
+    def color(self, value):
+        self._unpack()
+        self._color = value
+
+    @property
+    def packed(self):
+        """Density and colour interleaved per vertex (:func:`mi_voldis.grid.pack`): what lookups read."""
+        if self._packed is None:
+            with dr.resume_grad():  # first read may happen where gradients are suspended (mi.render's primal)
+                self._packed = grid.pack([self._density, self._color])
+            dr.eval(self._packed)
+        return self._packed
+
+    def set_packed(self, packed):
+        """Make ``packed`` (the layout of :attr:`packed`, same grid and channels) the field's values.
+
+        Fitting optimises this array directly, so that a step neither packs the two tensors nor
+        unpacks their gradients; ``density`` and ``color`` are unpacked from it when next read."""
+        expected = self.shape[0] * self.shape[1] * self.shape[2] * self.width
+        if dr.width(packed) != expected:
+            raise ValueError(f"radiance_field: packed grid needs {expected} values, got {dr.width(packed)}")
+        self._packed, self._density, self._color = packed, None, None
+
+    def _unpack(self):
+        if self._density is None:
+            self._density, self._color = grid.unpack(self._packed, [1, self.channels - 1],
+                                                     self.shape[::-1])
 
     def to_string(self):
         return (f"RadianceField[shape={self.shape}, sh_degree={self.sh_degree}, "

@@ -1,0 +1,118 @@
+"""The fitting step's fast path: packed grids as parameters, per-channel Adam rates, packed
+regularisers, and tiled ray batches."""
+from types import SimpleNamespace
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+import pytest
+from helpers import field_dict
+
+from mi_voldis import grid
+from mi_voldis.fit import grids
+from mi_voldis.fit.config import FitConfig
+from mi_voldis.fit.problem import FieldFit, PackedParameters
+from mi_voldis.fit.raybank import tile_pixels
+from mi_voldis.optim.adam import Adam
+
+
+def random_field(shape=(3, 4, 5), channels=3, seed=0):
+    rng = np.random.default_rng(seed)
+    d = rng.normal(size=shape + (1,)).astype(np.float32)
+    c = rng.normal(size=shape + (channels,)).astype(np.float32)
+    return mi.load_dict(field_dict(d, c)), d, c
+
+
+def test_set_packed_round_trip_and_size_check():
+    field, d, c = random_field(channels=12)  # 13 channels: packet width 16
+    new_d, new_c = d + 1.0, c * 2.0
+    field.set_packed(grid.pack([mi.TensorXf(new_d), mi.TensorXf(new_c)]))
+    assert np.array_equal(np.array(field.density), new_d)
+    assert np.array_equal(np.array(field.color), new_c)
+    sigma, _ = field.eval_local(mi.Point3f(0.0, 0.0, 0.0), mi.Vector3f(0, 0, 1))
+    np.testing.assert_allclose(np.array(sigma), [np.logaddexp(0, new_d[0, 0, 0, 0])], rtol=1e-6)
+    with pytest.raises(ValueError, match="packed grid needs 960 values, got 959"):
+        field.set_packed(dr.zeros(mi.Float, 959))
+
+
+def test_adam_on_packed_grid_matches_adam_on_tensors():
+    """One packed array with per-channel rates steps exactly like the two tensors with their own rates."""
+    field, d, c = random_field()
+    rng = np.random.default_rng(1)
+    g_d, g_c = rng.normal(size=d.shape).astype(np.float32), rng.normal(size=c.shape).astype(np.float32)
+    tensors = {"density": mi.TensorXf(d), "color": mi.TensorXf(c)}
+    adam_t = Adam({"density": 0.1, "color": 0.05})
+    params = PackedParameters({"full": field})
+    adam_p = Adam({"full.packed": params.slot_rates("full", 0.1, 0.05)})
+    for scale in (1.0, 0.5):
+        adam_t.step(tensors, {"density": mi.Float(g_d.ravel()), "color": mi.Float(g_c.ravel())}, scale)
+        g_packed = grid.pack([mi.TensorXf(g_d), mi.TensorXf(g_c)])
+        adam_p.step(params, {"full.packed": g_packed}, scale)
+        params.update()
+    assert type(params["full.packed"]) is mi.Float  # float32 throughout, never promoted
+    np.testing.assert_allclose(np.array(field.density), np.array(tensors["density"]), rtol=1e-6, atol=1e-7)
+    np.testing.assert_allclose(np.array(field.color), np.array(tensors["color"]), rtol=1e-6, atol=1e-7)
+    padding = np.array(field.packed).reshape(-1, field.width)[:, field.channels:]
+    assert field.width == 4 and not padding.size  # RGB: no padding; a zero-rate slot is tested below
+
+
+def test_adam_zero_rate_slots_stay_put():
+    x = mi.Float(np.arange(8, dtype=np.float32))
+    params = {"x": x}
+    Adam({"x": [0.0, 0.5]}).step(params, {"x": dr.full(mi.Float, 1.0, 8)})
+    out = np.array(params["x"])
+    assert np.array_equal(out[0::2], np.arange(0, 8, 2))
+    np.testing.assert_allclose(out[1::2], np.arange(1, 8, 2) - 0.5, rtol=1e-6)
+
+
+def test_packed_regularisers_match_the_tensor_formulas():
+    """Sparsity on density, TV on every tensor with its own weight, the hull mask, padding untouched."""
+    field, d, c = random_field(channels=12)
+    cfg = FitConfig(tv_every=2, tv_density=1e-2, tv_color=3e-3, sparsity=1e-1)
+    params = PackedParameters({"full": field})
+    hull = mi.Float((np.arange(d.size) % 3 != 0).astype(np.float32))
+    fake = SimpleNamespace(ctx=SimpleNamespace(cfg=cfg), roles=("full",), params=params, hull=hull,
+                           integrator=SimpleNamespace(fields={"full": field}))
+    grads = FieldFit.extra_gradients(fake, 4, {"full.packed": dr.zeros(mi.Float, dr.width(field.packed))})
+    got_d, got_c = grid.unpack(grads["full.packed"], [1, 12], d.shape[:3])
+    td, tc = mi.TensorXf(d), mi.TensorXf(c)
+    want_d = (cfg.sparsity / d.size) / (1 + np.exp(-d.ravel())) + 2 * cfg.tv_density * np.array(grids.laplacian(td))
+    want_c = 2 * cfg.tv_color * np.array(grids.laplacian(tc))
+    mask = np.array(hull)
+    np.testing.assert_allclose(np.array(got_d).ravel(), want_d * mask, rtol=1e-5, atol=1e-9)
+    np.testing.assert_allclose(np.array(got_c).ravel(), want_c * np.repeat(mask, 12), rtol=1e-5, atol=1e-9)
+    padding = np.array(grads["full.packed"]).reshape(-1, 16)[:, 13:]
+    assert not padding.any()
+
+
+def test_tiles_cover_their_anchor_inside_the_image():
+    rng = np.random.default_rng(0)
+    h, w, t = 7, 9, 4
+    anchors = rng.integers(0, 3 * h * w, 500)
+    idx = tile_pixels(rng, anchors, t, h, w).reshape(-1, t * t)
+    view, pix = np.divmod(idx, h * w)
+    y, x = np.divmod(pix, w)
+    assert (view == (anchors // (h * w))[:, None]).all()
+    assert (idx == anchors[:, None]).any(axis=1).all()
+    assert ((y >= 0) & (y < h) & (x >= 0) & (x < w)).all()
+    assert all(len(set(row)) == t * t for row in idx)
+    # row-major t x t blocks of adjacent pixels
+    assert (np.diff(x.reshape(-1, t, t), axis=2) == 1).all() and (np.diff(y.reshape(-1, t, t), axis=1) == 1).all()
+
+
+def test_bench_rays_are_reproducible_and_tiles_are_coherent():
+    from mi_voldis.bench.rays import TILE, bench_rays
+    for kind in ("random", "tiles"):
+        o, d, u = bench_rays(kind, 4096, 3)
+        assert all(a.dtype == np.float32 for a in (o, d, u))
+        np.testing.assert_allclose(np.linalg.norm(d, axis=1), 1.0, rtol=1e-6)
+        np.testing.assert_allclose(np.linalg.norm(o, axis=1), 3.0, rtol=1e-6)
+        assert np.array_equal(o, bench_rays(kind, 4096, 3)[0]) and not np.array_equal(d, bench_rays(kind, 4096, 4)[1])
+        # the closest point of every ray to the centre lies inside the box [-1, 1]^3 for most rays
+        closest = o - np.sum(o * d, axis=1, keepdims=True) * d
+        assert np.mean(np.abs(closest).max(axis=1) < 1.0) > (0.999 if kind == "random" else 0.5)
+    o, d, _ = bench_rays("tiles", 4096, 3)
+    tiles = d.reshape(-1, TILE * TILE, 3)
+    assert (o.reshape(-1, TILE * TILE, 3) == o[::TILE * TILE, None]).all()  # one camera per tile
+    spread = np.degrees(np.arccos(np.clip(np.sum(tiles * tiles[:, :1], axis=2), -1, 1))).max()
+    assert spread < 1.0  # a tile spans a few pixels of a 45-degree, 256-pixel view
