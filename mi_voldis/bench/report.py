@@ -18,8 +18,9 @@ def write(results, report_dir, command):
     m = results["machine"]
     md += [f"Machine: {m['cpu']}, {m['cores']} cores, {m['system']}; variant `{m['variant']}`; "
            + ", ".join(f"{k} {v}" for k, v in m["versions"].items()) + ".", "",
-           "Timings are medians of a few steps on a shared machine (expect +-30%); ratios in one row were "
-           "measured back to back.", ""]
+           "Timings are medians of a few steps on a shared machine (expect +-30% between runs). In a throughput "
+           "row Dr.Jit and PyTorch run in alternating blocks of steps (two of each), so both see the same load "
+           "and the ratio holds better than either figure.", ""]
     md += _throughput(results)
     md += _speed_error(results, report_dir)
     md += _content(results)

@@ -49,11 +49,12 @@ def run_throughput(quick):
     for r, n, b in sizes:
         for kind in rays.KINDS if n == 128 else ("random",):
             heavy = r == 256 or b == 65536
-            row = {"resolution": r, "samples": n, "batch": b, "rays": kind,
-                   "voldis": throughput.measure(r, n, b, steps=3 if heavy else 5, rays=kind)}
+            impls = {"voldis": throughput.step_functions(r, n, b, rays=kind)}
             if torch_reference is not None and n == 128:
-                row["torch"] = torch_reference.measure(r, n, b, steps=2 if heavy else 4, warmup=1, rays=kind)
-            rows.append(row)
+                impls["torch"] = torch_reference.step_functions(r, n, b, rays=kind)
+            timed = throughput.interleaved(impls, 4 if heavy else 6, {"voldis": 2, "torch": 1})
+            rows.append({"resolution": r, "samples": n, "batch": b, "rays": kind, **timed})
+            del impls  # free both implementations' grids before the next row
     return rows
 
 

@@ -54,30 +54,62 @@ def trainer(resolution, samples, channels=3, fields=("full",), rays="random"):
     return integ, step
 
 
-def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, warmup=2, rays="random"):
-    """Seconds per forward and per training step (forward + backward + Adam) and million samples
-    (points where the fields are evaluated) per second of each."""
+def step_functions(resolution, samples, batch, channels=3, fields=("full",), rays="random"):
+    """{"forward": f, "train": f}: ``f(seed)`` runs one forward (no gradients) or one training step
+    (forward + backward + Adam) on fresh ``rays``, waits for it, and returns the samples evaluated."""
     integ, train_step = trainer(resolution, samples, channels, fields, rays)
     layers = tuple(dict.fromkeys(fields))
 
-    def forward(step):
-        o, d, u = device_rays(rays, batch, step)
+    def forward(seed):
+        o, d, u = device_rays(rays, batch, seed)
         with dr.suspend_grad():
             out = render_rays(integ, o, d, u, layers=layers)
             dr.eval(out)
-        return float(dr.sum(out["evaluated"])[0])
+        evaluated = float(dr.sum(out["evaluated"])[0])
+        dr.sync_thread()
+        return evaluated
 
-    result = {}
-    for name, fn in (("forward", forward), ("train", lambda step: train_step(batch, step))):
-        for k in range(warmup):
-            fn(k)
+    def train(seed):
+        evaluated = train_step(batch, seed)
         dr.sync_thread()
-        t = time.perf_counter()
-        evaluated = sum(fn(warmup + k) for k in range(steps))
-        dr.sync_thread()
-        seconds = (time.perf_counter() - t) / steps
-        result[name] = {"seconds": seconds, "msps": evaluated / steps / seconds / 1e6}
+        return evaluated
+    return {"forward": forward, "train": train}
+
+
+def interleaved(impls, steps, warmup, rounds=2):
+    """Time several implementations in alternating blocks (a block of each, ``rounds`` times), so that
+    the load of a shared machine falls on all of them alike. Each block starts with untimed steps
+    (``warmup[name]`` in the first round, one later): step by step alternation measured Dr.Jit
+    25-40% slower than alone right after PyTorch steps (12.4-13.1 -> 8.0-9.3 Msps, 128^3 training).
+    ``impls``: {name: {phase: f(seed) -> samples}}; ``steps``: timed steps of each, over all rounds.
+    Returns {name: {phase: {"seconds": median seconds per step, "msps": million samples per second
+    at that median}}}."""
+    per_round = -(-steps // rounds)
+    result = {name: {} for name in impls}
+    for phase in ("forward", "train"):
+        seconds = {name: [] for name in impls}
+        samples = {name: [] for name in impls}
+        seed = 0
+        for r in range(rounds):
+            for name, fns in impls.items():
+                for _ in range(warmup[name] if r == 0 else 1):
+                    fns[phase](seed)
+                    seed += 1
+                for _ in range(per_round):
+                    t = time.perf_counter()
+                    samples[name].append(fns[phase](seed))
+                    seconds[name].append(time.perf_counter() - t)
+                    seed += 1
+        for name in impls:
+            median = float(np.median(seconds[name]))
+            result[name][phase] = {"seconds": median, "msps": float(np.mean(samples[name])) / median / 1e6}
     return result
+
+
+def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, warmup=2, rays="random"):
+    """Median seconds per forward and per training step, and million samples per second of each."""
+    fns = step_functions(resolution, samples, batch, channels, fields, rays)
+    return interleaved({"voldis": fns}, steps, {"voldis": warmup}, rounds=1)["voldis"]
 
 
 def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, rays="random"):

@@ -14,7 +14,6 @@ Dr.Jit renderer's ``full`` layer:
   T < 1e-4, so the two agree to about 1e-4).
 """
 import os
-import time
 
 import numpy as np
 import torch
@@ -88,33 +87,32 @@ def random_field(resolution, seed=0):
     return TorchGridField.from_numpy(density, color, [-1.0] * 3, [1.0] * 3)
 
 
-def measure(resolution, samples, batch, steps=5, warmup=2, threads=None, rays="random"):
-    """Seconds per forward (no grad) and per training step (forward + backward + Adam, lr 1e-2, MSE to
-    the colour (0.5, 0.4, 0.3)) and their million samples (rays x samples per ray) per second. As in
-    ``throughput.measure``, each step draws fresh rays and the timing includes drawing them."""
+def step_functions(resolution, samples, batch, threads=None, rays="random"):
+    """{"forward": f, "train": f} as in ``throughput.step_functions``: ``f(seed)`` runs one forward (no
+    grad) or training step (forward + backward + Adam, lr 1e-2, MSE to the colour (0.5, 0.4, 0.3)) on
+    fresh rays, drawing them included, and returns the samples (rays x samples per ray)."""
     torch.set_num_threads(threads or os.cpu_count())
     field = random_field(resolution)
     field.grid.requires_grad_(True)
     opt = torch.optim.Adam([field.grid], lr=1e-2)
     target = torch.tensor([0.5, 0.4, 0.3])
 
-    def forward(step):
+    def forward(seed):
         with torch.no_grad():
-            render(field, *torch_rays(rays, batch, step), samples)
+            render(field, *torch_rays(rays, batch, seed), samples)
+        return batch * samples
 
-    def train(step):
+    def train(seed):
         opt.zero_grad(set_to_none=True)
-        rgb, _ = render(field, *torch_rays(rays, batch, step), samples)
+        rgb, _ = render(field, *torch_rays(rays, batch, seed), samples)
         torch.mean(torch.square(rgb - target)).backward()
         opt.step()
+        return batch * samples
+    return {"forward": forward, "train": train}
 
-    result = {}
-    for name, fn in (("forward", forward), ("train", train)):
-        for k in range(warmup):
-            fn(k)
-        t = time.perf_counter()
-        for k in range(steps):
-            fn(warmup + k)
-        seconds = (time.perf_counter() - t) / steps
-        result[name] = {"seconds": seconds, "msps": batch * samples / seconds / 1e6}
-    return result
+
+def measure(resolution, samples, batch, steps=5, warmup=2, threads=None, rays="random"):
+    """Median seconds per forward and per training step, and million samples per second of each."""
+    from .throughput import interleaved
+    fns = step_functions(resolution, samples, batch, threads, rays)
+    return interleaved({"torch": fns}, steps, {"torch": warmup}, rounds=1)["torch"]
