@@ -1,6 +1,7 @@
 """Fitting: what a run writes, that it renders from its own scene.xml, resume after kill -9, config."""
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -61,11 +62,24 @@ def test_peak_rss_follows_this_process_not_its_parent():
     assert 400 * 0.9 < child < 1500  # its own 400 MB array plus the interpreter, not the parent's 2 GB
 
 
-def test_bad_config_is_refused():
+def test_bad_config_is_refused(tmp_path):
     with pytest.raises(ValueError, match="unknown configuration key"):
         FitConfig.from_sources(None, ["stepz=3"])
     with pytest.raises(ValueError, match="name=value"):
         FitConfig.from_sources(None, ["steps_full"])
+    for item, message in (("batch_tile=0", "batch_tile must be a whole number >= 1, got 0"),
+                          ("batch_rays=1.5", "batch_rays must be a whole number >= 1, got 1.5"),
+                          ("step_voxels=-1", "step_voxels must be a number > 0, got -1"),
+                          ("lr_color=\"fast\"", "lr_color must be a number > 0, got 'fast'")):
+        with pytest.raises(ValueError, match=re.escape(message)):
+            FitConfig.from_sources(None, [item])
+    bad = tmp_path / "cfg.json"
+    bad.write_text('{"batch_tile": 0}')
+    with pytest.raises(ValueError, match=re.escape(f"{bad}: configuration: batch_tile must be")):
+        FitConfig.from_sources(str(bad))
+    bad.write_text('{"batch_tile": ')
+    with pytest.raises(ValueError, match=re.escape(f"{bad}: Expecting value")):
+        FitConfig.from_sources(str(bad))
 
 
 def test_train_script_errors_name_the_dataset(tmp_path):

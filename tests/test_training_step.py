@@ -43,7 +43,7 @@ def test_adam_on_packed_grid_matches_adam_on_tensors():
     tensors = {"density": mi.TensorXf(d), "color": mi.TensorXf(c)}
     adam_t = Adam({"density": 0.1, "color": 0.05})
     params = PackedParameters({"full": field})
-    adam_p = Adam({"full.packed": params.slot_rates("full", 0.1, 0.05)})
+    adam_p = Adam({"full.packed": params.per_slot("full", 0.1, 0.05)})
     for scale in (1.0, 0.5):
         adam_t.step(tensors, {"density": mi.Float(g_d.ravel()), "color": mi.Float(g_c.ravel())}, scale)
         g_packed = grid.pack([mi.TensorXf(g_d), mi.TensorXf(g_c)])

@@ -70,12 +70,26 @@ class FitConfig:
     eval_views: int = 3               # held-out views rendered for that log
     preview_views: int = 3
 
+    def __post_init__(self):
+        for name in ("steps_full", "batch_rays", "batch_tile", "max_samples", "tv_every", "occupancy_every",
+                     "sh_trial_steps"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ValueError(f"configuration: {name} must be a whole number >= 1, got {value!r}")
+        for name in ("step_voxels", "lr_density", "lr_color"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or isinstance(value, bool) or not value > 0:
+                raise ValueError(f"configuration: {name} must be a number > 0, got {value!r}")
+
     @classmethod
     def from_sources(cls, path=None, overrides=()):
         cfg = cls()
         if path:
-            with open(path) as f:
-                cfg = cfg.replace(**json.load(f))
+            try:
+                with open(path) as f:
+                    cfg = cfg.replace(**json.load(f))
+            except (OSError, ValueError) as e:  # JSON errors are ValueErrors
+                raise ValueError(f"{path}: {e}") from e
         for item in overrides:
             if "=" not in item:
                 raise ValueError(f"--set expects name=value, got '{item}'")

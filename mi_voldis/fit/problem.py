@@ -20,8 +20,8 @@ class PackedParameters(dict):
 
     Adam steps on the very arrays the march reads: a step neither packs density and colour tensors
     nor unpacks their gradients (at 128^3 that is three passes over 32 MB per field and step).
-    ``update()`` hands changed arrays back to the fields; ``slot_rates`` gives Adam's per-channel
-    learning rates in the packed layout."""
+    ``update()`` hands changed arrays back to the fields; ``per_slot`` lays out per-channel values
+    (Adam's learning rates, regulariser weights) in the packed layout."""
 
     def __init__(self, fields):
         self.fields = dict(fields)
@@ -33,9 +33,9 @@ class PackedParameters(dict):
             if value is not field.packed:
                 field.set_packed(value)
 
-    def slot_rates(self, role, density, color):
-        """Learning rates of one packed vertex: ``density`` for channel 0, ``color`` for the colour
-        channels, 0 for the padding."""
+    def per_slot(self, role, density, color):
+        """Values for the slots of one packed vertex: ``density`` for channel 0, ``color`` for the
+        colour channels, 0 for the padding."""
         f = self.fields[role]
         return [density] + [color] * (f.channels - 1) + [0.0] * (f.width - f.channels)
 
@@ -58,14 +58,13 @@ class FieldFit:
         self.params = PackedParameters({r: self.integrator.fields[r] for r in self.roles})
         self.keys = list(self.params)
         for r in self.roles:
-            self.adam.lrs[f"{r}.packed"] = self.params.slot_rates(r, *self.rates)
+            self.adam.lrs[f"{r}.packed"] = self.params.per_slot(r, *self.rates)
         self.samples = None  # the integrator's: at most max_samples, every step_size
         if ctx.occupancy_on:
             extra = ctx.hull_points if self.hull is not None else None
             self.integrator.update_occupancy(ctx.cfg.occupancy_resolution, ctx.occupancy_sigma(), extra)
 
     def sync_states(self):
-        self.params.update()
         for r in self.roles:
             s, f = self.ctx.states[r], self.integrator.fields[r]
             s.density, s.color = f.density, f.color
@@ -122,9 +121,9 @@ class FieldFit:
             channel = dr.arange(mi.UInt32, dr.width(values)) % f.width
             g = grads[key] + dr.select(channel == 0, (cfg.sparsity / vertices) * dr.rcp(1.0 + dr.exp(-values)), 0.0)
             if tv:  # grids.laplacian averages over every slot: rescale to per-vertex means of each tensor
-                weights = ([cfg.tv_density * f.width] + [cfg.tv_color * f.width / (f.channels - 1)] * (f.channels - 1)
-                           + [0.0] * (f.width - f.channels))
-                weight = dr.gather(mi.Float, mi.Float(np.float32(weights) * tv), channel)
+                weights = self.params.per_slot(r, tv * cfg.tv_density * f.width,
+                                               tv * cfg.tv_color * f.width / (f.channels - 1))
+                weight = dr.gather(mi.Float, mi.Float(np.float32(weights)), channel)
                 g = g + weight * grids.laplacian(mi.TensorXf(values, (*f.shape[::-1], f.width)))
             if self.hull is not None:  # refit only inside the hull
                 g = g * dr.repeat(self.hull, f.width)

@@ -16,6 +16,18 @@ SH_DEGREES = {3: 0, 12: 1, 27: 2}  # colour channels -> spherical-harmonic degre
 SH_Y0 = 0.28209479177387814  # Y_0^0 = 1 / (2 sqrt(pi))
 
 
+def _unpacked_tensor(slot, doc):
+    """A tensor attribute of :class:`RadianceField` that is unpacked from ``packed`` when it is stale."""
+    def get(self):
+        self._unpack()
+        return getattr(self, slot)
+
+    def set(self, value):
+        self._unpack()  # the other tensor must not go stale
+        setattr(self, slot, value)
+    return property(get, set, doc=doc)
+
+
 class RadianceField(mi.Medium):
     r"""
     .. _medium-radiance_field:
@@ -128,27 +140,8 @@ class RadianceField(mi.Medium):
         self._packed = None  # packed on first use: a step that sets both tensors packs them once
 
     # ------------------------------------------------------------ values: tensors or packed
-    @property
-    def density(self):
-        """Raw density tensor (Z, Y, X, 1)."""
-        self._unpack()
-        return self._density
-
-    @density.setter
-    def density(self, value):
-        self._unpack()
-        self._density = value
-
-    @property
-    def color(self):
-        """Raw colour tensor (Z, Y, X, C)."""
-        self._unpack()
-        return self._color
-
-    @color.setter
-    def color(self, value):
-        self._unpack()
-        self._color = value
+    density = _unpacked_tensor("_density", "Raw density tensor (Z, Y, X, 1).")
+    color = _unpacked_tensor("_color", "Raw colour tensor (Z, Y, X, C).")
 
     @property
     def packed(self):
