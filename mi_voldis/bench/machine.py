@@ -2,8 +2,9 @@
 
 Bandwidth is measured with a large copy (read + write counted) by NumPy (one thread) and by a Dr.Jit
 kernel (all threads). A density + RGB trilinear lookup touches 8 corners x 4 floats = 128 bytes; a
-training sample touches about four times that (the forward lookup, the adjoint's lookup, and the
-read-modify-write of the gradient scatter), which gives the bandwidth bound on samples per second.
+training sample touches three times that (the forward lookup and the read-modify-write of the
+gradient scatter) plus its 16-byte record written and read back (the adjoint replays recorded values,
+:class:`mi_voldis.render.march.Record`), which gives the bandwidth bound on samples per second.
 """
 import os
 import platform
@@ -15,7 +16,7 @@ import mitsuba as mi
 import numpy as np
 
 BYTES_FORWARD = 8 * 4 * 4
-BYTES_TRAIN = 4 * BYTES_FORWARD
+BYTES_TRAIN = 3 * BYTES_FORWARD + 2 * 16
 
 
 def describe():

@@ -37,8 +37,9 @@ def _throughput(results):
     md = ["## 1. Ray-marcher throughput (density + RGB grid)", "",
           f"Memory bandwidth (large copy): {bw['drjit_gbs']:.1f} GB/s with Dr.Jit on all cores, "
           f"{bw['numpy_gbs']:.1f} GB/s with NumPy on one. A sample touches {BYTES_FORWARD} B forward "
-          f"(8 corners x 4 floats) and about {BYTES_TRAIN} B in training (lookup, adjoint lookup, gradient "
-          f"read-modify-write): bounds of {fwd_bound:.0f} and {train_bound:.0f} Msps.", "",
+          f"(8 corners x 4 floats) and {BYTES_TRAIN} B in training (lookup, gradient read-modify-write, and the "
+          f"16-byte record of the lookup written and read back): bounds of {fwd_bound:.0f} and {train_bound:.0f} "
+          "Msps. These count bytes as if streamed; the lookups and scatters are scattered 16-byte accesses.", "",
           "Rays (`mi_voldis/bench/rays.py`): *random* rays, each independent of its neighbours, and *tiles*, "
           f"coherent rays: {tile} x {tile} pixel tiles of random views, whose rays march side by side through the "
           "same cells (as in a rendered view, or fitting with `batch_tile=4`; section 2 shows what that does to "

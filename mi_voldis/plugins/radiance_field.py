@@ -179,9 +179,18 @@ class RadianceField(mi.Medium):
         integrator passes gradient-tracked copies during its adjoint pass). Returns
         ``(sigma, color)``; sigma is 0 outside the unit cube."""
         inside = dr.all((p >= 0.0) & (p <= 1.0)) & active
-        v = grid.trilinear(self.packed if data is None else data, self.shape, self.width,
-                           self.channels, p, inside)
-        sigma = dr.select(inside, self.density_scale * softplus(v[0]), 0.0)
+        return self.activate(self.lookup(p, data, inside), d, inside)
+
+    def lookup(self, p, data=None, active=True):
+        """Raw values at local points ``p`` (clamped to the unit cube): the ``channels`` interpolated
+        grid channels, density first (Float arrays)."""
+        return grid.trilinear(self.packed if data is None else data, self.shape, self.width,
+                              self.channels, p, active)
+
+    def activate(self, v, d, active=True):
+        """``(sigma, color)`` from raw values ``v`` (:meth:`lookup`) seen along ``d``: sigma =
+        s softplus(v_0) where ``active`` (0 elsewhere), colour = sigmoid of the SH sum."""
+        sigma = dr.select(active, self.density_scale * softplus(v[0]), 0.0)
         logits = [v[1], v[2], v[3]]
         if self.sh_degree > 0:
             basis = dr.sh_eval(dr.normalize(d), self.sh_degree)

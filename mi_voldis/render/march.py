@@ -4,9 +4,15 @@ A :class:`Plan` fixes what one march computes: which field lookups (field, world
 the composition rule, the layers wanted and the number of samples. The primal pass accumulates,
 for every (chain, layer) term of :mod:`mixing`, the sums  sum_i w_i (g_i, k_i, k_i t_i).
 
-The adjoint replays the march front to back (as Mitsuba's PRB integrators do), so its memory does
-not grow with the number of samples. For a chain with optical depths x_i = sigma_i delta_i and an
-output L = sum_i w_i g_i with w_i = exp(-sum_{j<i} x_j) (1 - exp(-x_i)):
+The adjoint replays the march front to back (as Mitsuba's PRB integrators do). The lookups' raw
+values at every sample can be recorded by the primal (:class:`Record`, 16 bytes per sample and
+lookup for RGB fields, kept up to RECORD_BYTES): the replay then reads them in contiguous runs
+instead of gathering the 8 grid corners again, and only the gradient scatters touch the grids
+(a 128^3 training step at 128 samples/ray: adjoint kernel 69 -> 44 ms). Without a record the
+replay reads the grids, and memory does not grow with the number of samples.
+
+For a chain with optical depths x_i = sigma_i delta_i and an output L = sum_i w_i g_i with
+w_i = exp(-sum_{j<i} x_j) (1 - exp(-x_i)):
 
     dL/dg_i = w_i,      dL/dx_i = exp(-sum_{j<=i} x_j) g_i - sum_{j>i} w_j g_j.
 
@@ -20,6 +26,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .. import grid
 from ..transforms import apply_point, apply_vector
 from . import mixing, quadrature
 from .sampler import sample_interval
@@ -117,20 +124,60 @@ def _distance(plan, rays, t, p):
     return dr.dot(plan.space.to_world(p) - rays.o, rays.d)
 
 
-def _sample(plan, data, p, d, active):
+def _sample(plan, data, p, d, active, raw=None):
     """Chains' densities and the terms at scene-space points ``p`` seen along world directions ``d``.
-    Samples in unoccupied cells are not evaluated (every density is 0 there)."""
+    Samples in unoccupied cells are not evaluated (every density is 0 there).
+
+    ``raw``: the lookups' raw values at these points, recorded by the primal (:class:`Record`), or
+    None. Given, the lookups take their values from it and read nothing from the grids: only their
+    gradients go there (their gathers have no use left and drop out of the kernel)."""
     if plan.occupancy is not None:
         active = active & plan.occupancy.lookup(p)
-    values = {}
+    values, lookups = {}, {}
     for lk in plan.lookups:
         q = p if lk.warp is None else plan.space.from_world(apply_point(lk.warp, plan.space.to_world(p)))
         pl = apply_point(lk.to_local, q)
         inside = active & dr.all((pl >= 0.0) & (pl <= 1.0))
-        sigma, color = lk.field.eval_local(pl, apply_vector(lk.to_frame, d), data[id(lk.field)], inside)
-        values[lk.key] = (sigma, color, inside)
+        v = lk.field.lookup(pl, data[id(lk.field)], inside)
+        if raw is not None:
+            v = [dr.replace_grad(r, x) for r, x in zip(raw[lk.key], v)]
+        lookups[lk.key] = v
+        values[lk.key] = (*lk.field.activate(v, apply_vector(lk.to_frame, d), inside), inside)
     sig, terms = mixing.compose(plan.rule, plan.sources, plan.layers, values)
-    return sig, terms, active
+    return sig, terms, active, lookups
+
+
+class Record:
+    """The raw values of every lookup at every sample of a primal march, for its adjoint to replay
+    instead of reading the grids again. Sample i of ray r sits at slot i * rays + r, so that a SIMD
+    packet of neighbouring rays writes and reads one contiguous run; ``samples``: the most any ray
+    takes."""
+
+    def __init__(self, plan, rays, samples):
+        self.rays = rays
+        self.index = dr.arange(mi.UInt32, rays)
+        self.buffers = {}
+        for lk in plan.lookups:
+            width = grid.packet_width(lk.field.channels)
+            self.buffers[lk.key] = (dr.empty(mi.Float, width * rays * samples), width, lk.field.channels)
+        dr.eval(self.buffers)
+
+    @staticmethod
+    def size(plan, rays, samples):
+        """Bytes a record of ``rays`` rays and ``samples`` samples per ray takes."""
+        return 4 * rays * samples * sum(grid.packet_width(lk.field.channels) for lk in plan.lookups)
+
+    def write(self, i, lookups, active):
+        for key, (buf, width, _) in self.buffers.items():
+            v = list(lookups[key]) + [mi.Float(0.0)] * (width - len(lookups[key]))
+            dr.scatter(buf, mi.ArrayXf(v), i * self.rays + self.index, active)
+
+    def read(self, i, active):
+        out = {}
+        for key, (buf, width, channels) in self.buffers.items():
+            v = dr.gather(mi.ArrayXf, buf, i * self.rays + self.index, active, shape=(width, self.rays))
+            out[key] = [v[k] for k in range(channels)]
+        return out
 
 
 def _continue(i, depth, n):
@@ -141,7 +188,7 @@ def _continue(i, depth, n):
     return (i < n) & (lowest < quadrature.OPTICAL_DEPTH_CUTOFF)
 
 
-def primal(plan, data, rays, u, active):
+def primal(plan, data, rays, u, active, record=None):
     """Primal march. Returns ``(acc, stats)``: {"chain|layer": [R, G, B, alpha, depth-numerator]}
     (Float arrays) and per-ray statistics (not differentiable): ``evaluated``, the samples evaluated
     (occupied and before termination), and with the ``fg`` layer ``fg_coverage`` = sum_i max(w_fg,i, 0),
@@ -149,7 +196,8 @@ def primal(plan, data, rays, u, active):
     opaque background lies behind the object).
 
     ``data``: id(field) -> packed grid; ``rays``: from :func:`prepare_rays`; ``u``: per-ray jitter
-    in [0, 1) of the stratified samples t_i = t0 + (i + u) dt (see :func:`sample_count`)."""
+    in [0, 1) of the stratified samples t_i = t0 + (i + u) dt (see :func:`sample_count`); ``record``:
+    a :class:`Record` to keep the lookups' raw values in, for :func:`adjoint`."""
     n, dt = sample_count(plan, rays)
     delta = dt * dr.norm(rays.d_s)
     zero = dr.zeros(mi.Float, dr.width(rays.t0))
@@ -163,7 +211,9 @@ def primal(plan, data, rays, u, active):
     def body(i, active, depth, acc, stats):
         t = rays.t0 + (mi.Float(i) + u) * dt
         p = rays.o_s + t * rays.d_s
-        sig, terms, occupied = _sample(plan, data, p, rays.d, active)
+        sig, terms, occupied, lookups = _sample(plan, data, p, rays.d, active)
+        if record is not None:
+            record.write(i, lookups, active)
         stats = dict(stats, evaluated=stats["evaluated"] + dr.select(occupied, 1.0, 0.0))
         t = _distance(plan, rays, t, p)
         x = {c: sig[c] * delta for c in plan.chains}
@@ -184,11 +234,12 @@ def primal(plan, data, rays, u, active):
     return acc, stats
 
 
-def adjoint(plan, data, rays, u, active, grads, acc):
+def adjoint(plan, data, rays, u, active, grads, acc, record=None):
     """Path-replay adjoint: accumulates gradients into the (gradient-tracked) arrays of ``data``.
 
     ``grads``: layer -> (dRGB Color3f, d_alpha, d_depth_numerator), the adjoint of each layer's raw
-    sums; ``acc``: the primal's per-term sums for the same rays and jitter."""
+    sums; ``acc``: the primal's per-term sums for the same rays and jitter; ``record``: the primal's
+    :class:`Record`, if it kept one (the replay then reads no grid values)."""
     n, dt = sample_count(plan, rays)
     delta = dt * dr.norm(rays.d_s)
     zero = dr.zeros(mi.Float, dr.width(rays.t0))
@@ -205,7 +256,8 @@ def adjoint(plan, data, rays, u, active, grads, acc):
         t = rays.t0 + (mi.Float(i) + u) * dt
         p = rays.o_s + t * rays.d_s
         with dr.resume_grad():
-            sig, terms, _ = _sample(plan, data, p, rays.d, active)
+            raw = record.read(i, active) if record is not None else None
+            sig, terms, _, _ = _sample(plan, data, p, rays.d, active, raw)
             t = _distance(plan, rays, t, p)
             x = {c: sig[c] * delta for c in plan.chains}
             w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
@@ -225,7 +277,7 @@ def adjoint(plan, data, rays, u, active, grads, acc):
     dr.while_loop((i, active, depth, rho), lambda i, a, *_: a, body, label="voldis adjoint")
 
 
-def packed_gradients(plan, rays, u, active, grads, acc):
+def packed_gradients(plan, rays, u, active, grads, acc, record=None):
     """Gradients of the fields' packed grids, ``{id(field): array or None}``, from the adjoint march.
 
     The march writes into detached, gradient-tracked copies of the packed grids (of the fields whose
@@ -243,5 +295,18 @@ def packed_gradients(plan, rays, u, active, grads, acc):
         largest = max(dr.width(leaf) for leaf in leaves.values())
         if dr.expand_threshold() <= largest:
             dr.set_expand_threshold(largest + 1)
-        adjoint(plan, leaves, rays, u, active, grads, acc)
+        adjoint(plan, leaves, rays, u, active, grads, acc, record)
         return {k: dr.grad(v) if dr.grad_enabled(v) else None for k, v in leaves.items()}
+
+
+RECORD_BYTES = 1 << 30  # largest Record kept; larger batches replay by reading the grids again
+
+
+def new_record(plan, rays):
+    """A :class:`Record` for a primal march of ``rays``, or None if it would exceed RECORD_BYTES."""
+    n, _ = sample_count(plan, rays)
+    most = n if isinstance(n, int) else int(dr.max(n)[0])
+    count = dr.width(rays.t0)
+    if Record.size(plan, count, most) > RECORD_BYTES:
+        return None
+    return Record(plan, count, most)

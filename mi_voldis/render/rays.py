@@ -18,7 +18,8 @@ class _RenderRays(dr.CustomOp):
         self.plan, self.u = plan, u
         self.rays = march.prepare_rays(plan, o, d, t_min, t_max)
         data = {id(f): dr.detach(f.packed) for f in plan.fields}
-        self.acc, stats = march.primal(plan, data, self.rays, u, True)
+        self.record = march.new_record(plan, self.rays) if tracked else None
+        self.acc, stats = march.primal(plan, data, self.rays, u, True, self.record)
         self.sums = layer_io.raw_sums(self.plan, self.acc)
         out = layer_io.finalize(self.sums)
         out.update(stats)  # per-ray statistics, not differentiable
@@ -28,7 +29,8 @@ class _RenderRays(dr.CustomOp):
     def backward(self):
         grad_out = self.grad_out()
         raw = layer_io.finalize_adjoint(self.sums, {k: grad_out[k] for k in self.plan.layers})
-        grads = march.packed_gradients(self.plan, self.rays, self.u, True, raw, self.acc)
+        grads = march.packed_gradients(self.plan, self.rays, self.u, True, raw, self.acc, self.record)
+        self.record = None
         self.set_grad_in("tracked", tuple(grads[id(f)] for f in self.plan.fields if grads[id(f)] is not None))
 
     def name(self):
