@@ -13,6 +13,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..activations import inverse_softplus
+from ..device import from_numpy
 from ..fieldspec import box_transform, field_dict
 from ..render.march import prepare_rays, sample_count
 from ..render.rays import render_rays
@@ -42,7 +43,7 @@ def rays(size, n, seed=0):
     o = 1.5 * size * v / np.linalg.norm(v, axis=1, keepdims=True)
     d = rng.uniform(-0.5, 0.5, (n, 3)) - o
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    return mi.Point3f(*o.T), mi.Vector3f(*d.T), mi.Float(rng.uniform(0, 1, n))
+    return from_numpy(mi.Point3f, o), from_numpy(mi.Vector3f, d), from_numpy(mi.Float, rng.uniform(0, 1, n))
 
 
 def measure(size, occupancy, batch=8192, steps=3):

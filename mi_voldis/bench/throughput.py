@@ -10,6 +10,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..device import from_numpy
 from ..fieldspec import box_transform, field_dict
 from ..fit.problem import PackedParameters
 from ..optim.adam import Adam
@@ -19,7 +20,7 @@ from .rays import bench_rays
 
 def device_rays(kind, n, seed):
     o, d, u = bench_rays(kind, n, seed)
-    return mi.Point3f(*o.T), mi.Vector3f(*d.T), mi.Float(u)
+    return from_numpy(mi.Point3f, o), from_numpy(mi.Vector3f, d), from_numpy(mi.Float, u)
 
 
 def make_integrator(resolution, samples, channels=3, seed=0):

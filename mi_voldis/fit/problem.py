@@ -7,6 +7,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..data.scene_box import scene_space
+from ..device import from_numpy
 from ..optim.adam import Adam
 from ..optim.loop import Checkpoint
 from ..render.rays import render_rays
@@ -93,7 +94,8 @@ class FieldFit:
         rng = np.random.default_rng([ctx.cfg.seed, self.phase, step])
         n = ctx.cfg.batch_rays
         o, d, color, mask = self.bank.batch(rng, n, self.pool, ctx.cfg.batch_tile)
-        out = render_rays(self.integrator, o, d, mi.Float(rng.random(n, np.float32)), self.layers, self.samples)
+        out = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(n, np.float32)), self.layers,
+                          self.samples)
         behind = ctx.behind(rng, n)  # what shows through where a layer is not opaque
         loss = mi.Float(0.0)
         stats = {"samples": float(dr.sum(out["evaluated"])[0])}
@@ -123,7 +125,7 @@ class FieldFit:
             if tv:  # grids.laplacian averages over every slot: rescale to per-vertex means of each tensor
                 weights = self.params.per_slot(r, tv * cfg.tv_density * f.width,
                                                tv * cfg.tv_color * f.width / (f.channels - 1))
-                weight = dr.gather(mi.Float, mi.Float(np.float32(weights)), channel)
+                weight = dr.gather(mi.Float, from_numpy(mi.Float, weights), channel)
                 g = g + weight * grids.laplacian(mi.TensorXf(values, (*f.shape[::-1], f.width)))
             if self.hull is not None:  # refit only inside the hull
                 g = g * dr.repeat(self.hull, f.width)
@@ -206,7 +208,7 @@ class FitContext:
         bg = self.ds.meta.get("background_color")
         if bg is not None:
             return mi.Color3f(*bg)
-        return mi.Color3f(*rng.random((3, n), np.float32))
+        return from_numpy(mi.Color3f, rng.random((3, n), np.float32).T)
 
     def occupancy_sigma(self):
         """Density (per scene unit) of a voxel of opacity ``occupancy_alpha`` at the current grid."""

@@ -12,6 +12,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..data.cameras import pixel_rays
+from ..device import from_numpy
 
 
 class RayBank:
@@ -50,15 +51,15 @@ class RayBank:
     def rays(self, index, jitter):
         """World rays (o, d), colours and masks of flat pixel indices; ``jitter`` (n, 2) in [0, 1)
         places each ray inside its pixel."""
-        index = mi.UInt32(index)
+        index = from_numpy(mi.UInt32, index)
         hw = self.height * self.width
         view = index // hw
         pix = index - view * hw
         py = pix // self.width
         px = pix - py * self.width
         cam = dr.gather(mi.ArrayXf, self.cameras, view, shape=(16, dr.width(index)))
-        fx = (mi.Float(px) + mi.Float(jitter[:, 0])) / self.width
-        fy = (mi.Float(py) + mi.Float(jitter[:, 1])) / self.height
+        fx = (mi.Float(px) + from_numpy(mi.Float, jitter[:, 0])) / self.width
+        fy = (mi.Float(py) + from_numpy(mi.Float, jitter[:, 1])) / self.height
         x = (0.5 - fx - cam[14]) * cam[12]
         y = (0.5 - fy - cam[15]) * cam[13]
         d = dr.normalize(mi.Vector3f(cam[0] * x + cam[1] * y + cam[2], cam[3] * x + cam[4] * y + cam[5],

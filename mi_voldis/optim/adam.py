@@ -13,6 +13,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..device import from_numpy
+
 
 class Adam:
     def __init__(self, lrs, beta1=0.9, beta2=0.99, eps=1e-8, warmup=0):
@@ -44,13 +46,16 @@ class Adam:
             self.m[key] = dr.fma(self.beta1, self.m[key], (1 - self.beta1) * g)
             self.v[key] = dr.fma(self.beta2, self.v[key], (1 - self.beta2) * dr.square(g))
             ramp = min(1.0, t / self.warmup) if self.warmup else 1.0
-            step = float(scale * ramp * np.sqrt(1 - self.beta2 ** t) / (1 - self.beta1 ** t))
+            # numbers that change every step enter as arrays, not as constants compiled into the
+            # kernel: else the update kernel would compile anew at every step
+            step = dr.opaque(mi.Float, scale * ramp * np.sqrt(1 - self.beta2 ** t) / (1 - self.beta1 ** t))
+            eps = dr.opaque(mi.Float, self.eps * np.sqrt(1 - self.beta2 ** t))
             if np.ndim(lr):  # per-slot rates, periodic along the array
                 slot = dr.arange(mi.UInt32, dr.width(g)) % len(lr)
-                step = dr.gather(mi.Float, mi.Float(np.asarray(lr, np.float32)), slot) * step
+                step = dr.gather(mi.Float, from_numpy(mi.Float, lr), slot) * step
             else:
                 step = lr * step
-            update = self.m[key] * (step / (dr.sqrt(self.v[key]) + float(self.eps * np.sqrt(1 - self.beta2 ** t))))
+            update = self.m[key] * (step / (dr.sqrt(self.v[key]) + eps))
             if isinstance(x, mi.TensorXf):
                 params[key] = mi.TensorXf(dr.detach(x.array) - update, x.shape)
             else:

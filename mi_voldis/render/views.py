@@ -4,6 +4,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..data.cameras import pixel_rays
+from ..device import from_numpy
 from .rays import render_rays
 
 CHUNK = 1 << 16  # rays per launch
@@ -19,7 +20,7 @@ def render_camera(integrator, camera, layers=("composite", "full", "bg", "fg"), 
     coverage = []
     with dr.suspend_grad():
         for s in range(0, len(o), CHUNK):
-            oo, dd = mi.Point3f(*o[s:s + CHUNK].T), mi.Vector3f(*d[s:s + CHUNK].T)
+            oo, dd = from_numpy(mi.Point3f, o[s:s + CHUNK]), from_numpy(mi.Vector3f, d[s:s + CHUNK])
             res = render_rays(integrator, oo, dd, dr.full(mi.Float, 0.5, dr.width(oo)), layers, samples)
             for layer in layers:
                 rgb, a, z = res[layer]

@@ -14,6 +14,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..data import DatasetError, load_dataset
+from ..device import from_numpy
 from ..export import linear_channels, previews
 from ..fit import grids
 from ..fit.raybank import RayBank
@@ -112,7 +113,7 @@ class EditProblem:
         rng = np.random.default_rng([self.seed, 7, step])
         n = self.batch
         o, d, color, mask = self.bank.batch(rng, n, self.pool)
-        out = render_rays(self.integrator, o, d, mi.Float(rng.random(n, np.float32)), self.layers)
+        out = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(n, np.float32)), self.layers)
         loss = self.loss_fn(out, color, mask)
         return loss, {"samples": float(dr.sum(out["evaluated"])[0])}
 

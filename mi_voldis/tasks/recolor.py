@@ -16,6 +16,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..data.cameras import pixel_rays
+from ..device import from_numpy
 from ..metrics import psnr
 from ..optim.adam import Adam
 from ..render.rays import render_rays
@@ -124,7 +125,7 @@ class ClipProblem(EditProblem):
             mask = ds.masks[view][np.clip(py.astype(int), 0, cam.height - 1), np.clip(px.astype(int), 0, cam.width - 1)]
         else:
             mask = np.ones((size, size), bool)
-        return mi.Point3f(*o.T), mi.Vector3f(*d.T), mask.astype(np.float32)
+        return from_numpy(mi.Point3f, o), from_numpy(mi.Vector3f, d), mask.astype(np.float32)
 
     def render(self, view, rng):
         o, d, mask = self.grid(view, rng)
