@@ -1,7 +1,7 @@
 """Speed against error, side by side, in one command.
 
     python scripts/bench.py [--quick] [--work out/bench] [--report reports]
-    python scripts/bench.py --step-profile [--rays random|tiles]   (one training step by kernel; JSON)
+    python scripts/bench.py --step-profile [--rays random|tiles]   (a training step by kernel, record on and off)
 
 Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
 PNG plots. --quick is a smoke run of a few minutes; the full run takes under an hour on 2 cores.
@@ -27,7 +27,9 @@ def main(argv=None):
         import json
 
         from mi_voldis.bench.throughput import step_profile
-        print(json.dumps(step_profile(rays=args.rays), indent=1))
+        # the record (adjoint replays the primal's lookup values) against reading the grid again
+        print(json.dumps({"record": step_profile(rays=args.rays),
+                          "no_record": step_profile(rays=args.rays, record=False)}, indent=1))
         return
     from mi_voldis.bench import report
     from mi_voldis.bench.run import run_all

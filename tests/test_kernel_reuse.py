@@ -66,3 +66,16 @@ def test_adam_update_compiles_once(history):
         dr.eval(x)
     hashes = history()
     assert len(hashes) >= 5 and len(set(hashes[1:])) == 1  # the first step creates the moments
+
+
+@pytest.mark.parametrize("record", [True, False])
+def test_training_step_builds_no_kernel_after_warmup(record):
+    """The benchmark's training step (fresh rays, Adam) on a small grid: every profiled step finds
+    its kernels compiled, with or without the record; the record setting is left as it was."""
+    from mi_voldis.bench.throughput import step_profile
+    from mi_voldis.render import march
+    limit = march.RECORD_BYTES
+    profile = step_profile(resolution=12, samples=16, batch=256, steps=3, warmup=2, record=record)
+    assert profile["compiled"] == 0
+    assert profile["primal_ms"] > 0 and profile["adjoint_ms"] > 0
+    assert march.RECORD_BYTES == limit

@@ -14,6 +14,7 @@ from ..device import from_numpy
 from ..fieldspec import box_transform, field_dict
 from ..fit.problem import PackedParameters
 from ..optim.adam import Adam
+from ..render import march
 from ..render.rays import render_rays
 from .rays import bench_rays
 
@@ -113,18 +114,22 @@ def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, w
     return interleaved({"voldis": fns}, steps, {"voldis": warmup}, rounds=1)["voldis"]
 
 
-def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, rays="random"):
+def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, rays="random", record=True):
     """Where a training step's time goes, from Dr.Jit's kernel history (median ms over ``steps``):
     the primal march kernel, the adjoint march kernel (the two kernels of ``batch`` threads), every
-    other kernel (packing, gradients, Adam), and the step's wall-clock time."""
+    other kernel (packing, gradients, Adam), the step's wall-clock time, and ``compiled``: kernels
+    built (not found in a cache) during the profiled steps, which should be 0. ``record=False``: the
+    adjoint reads the grid again instead of the primal's record (:class:`march.Record`)."""
     _, train_step = trainer(resolution, samples, rays=rays)
-    for k in range(warmup):
-        train_step(batch, k)
-    dr.sync_thread()
+    limit = march.RECORD_BYTES
+    march.RECORD_BYTES = limit if record else 0
     flag = dr.flag(dr.JitFlag.KernelHistory)
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
     rows = []
     try:
+        for k in range(warmup):
+            train_step(batch, k)
+        dr.sync_thread()
+        dr.set_flag(dr.JitFlag.KernelHistory, True)
         for k in range(steps):
             dr.kernel_history()  # drop what came before
             t = time.perf_counter()
@@ -132,12 +137,16 @@ def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, ra
             dr.sync_thread()
             wall = 1e3 * (time.perf_counter() - t)
             kernels = [h for h in dr.kernel_history() if "execution_time" in h]
-            march = [h["execution_time"] for h in kernels
-                     if h["size"] == batch and h["type"] == dr.KernelType.JIT]
+            widest = [h["execution_time"] for h in kernels
+                      if h["size"] == batch and h["type"] == dr.KernelType.JIT]
             total = sum(h["execution_time"] for h in kernels)
-            primal, adjoint = march  # the only kernels as wide as the batch
+            primal, adjoint = widest  # the only kernels as wide as the batch
             rows.append({"primal_ms": primal, "adjoint_ms": adjoint, "other_kernels_ms": total - primal - adjoint,
-                         "step_ms": wall, "msps": evaluated / wall / 1e3})
+                         "step_ms": wall, "msps": evaluated / wall / 1e3,
+                         "compiled": sum(not h.get("cache_hit", True) for h in kernels)})
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, flag)
-    return {key: float(np.median([r[key] for r in rows])) for key in rows[0]}
+        march.RECORD_BYTES = limit
+    out = {key: float(np.median([r[key] for r in rows])) for key in rows[0]}
+    out["compiled"] = sum(r["compiled"] for r in rows)
+    return out

@@ -26,7 +26,6 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .. import grid
 from ..transforms import apply_point, apply_vector
 from . import mixing, quadrature
 from .sampler import sample_interval
@@ -156,27 +155,29 @@ class Record:
     def __init__(self, plan, rays, samples):
         self.rays = rays
         self.index = dr.arange(mi.UInt32, rays)
-        self.buffers = {}
-        for lk in plan.lookups:
-            width = grid.packet_width(lk.field.channels)
-            self.buffers[lk.key] = (dr.empty(mi.Float, width * rays * samples), width, lk.field.channels)
+        self.fields = {lk.key: lk.field for lk in plan.lookups}
+        self.buffers = {key: dr.empty(mi.Float, f.width * rays * samples) for key, f in self.fields.items()}
         dr.eval(self.buffers)
 
     @staticmethod
     def size(plan, rays, samples):
         """Bytes a record of ``rays`` rays and ``samples`` samples per ray takes."""
-        return 4 * rays * samples * sum(grid.packet_width(lk.field.channels) for lk in plan.lookups)
+        return 4 * rays * samples * sum(lk.field.width for lk in plan.lookups)
+
+    def _slot(self, i):
+        return i * self.rays + self.index
 
     def write(self, i, lookups, active):
-        for key, (buf, width, _) in self.buffers.items():
-            v = list(lookups[key]) + [mi.Float(0.0)] * (width - len(lookups[key]))
-            dr.scatter(buf, mi.ArrayXf(v), i * self.rays + self.index, active)
+        for key, buf in self.buffers.items():
+            v = list(lookups[key]) + [mi.Float(0.0)] * (self.fields[key].width - len(lookups[key]))
+            dr.scatter(buf, mi.ArrayXf(v), self._slot(i), active)
 
     def read(self, i, active):
         out = {}
-        for key, (buf, width, channels) in self.buffers.items():
-            v = dr.gather(mi.ArrayXf, buf, i * self.rays + self.index, active, shape=(width, self.rays))
-            out[key] = [v[k] for k in range(channels)]
+        for key, buf in self.buffers.items():
+            f = self.fields[key]
+            v = dr.gather(mi.ArrayXf, buf, self._slot(i), active, shape=(f.width, self.rays))
+            out[key] = [v[k] for k in range(f.channels)]
         return out
 
 
@@ -299,7 +300,7 @@ def packed_gradients(plan, rays, u, active, grads, acc, record=None):
         return {k: dr.grad(v) if dr.grad_enabled(v) else None for k, v in leaves.items()}
 
 
-RECORD_BYTES = 1 << 30  # largest Record kept; larger batches replay by reading the grids again
+RECORD_BYTES = 1 << 30  # largest Record kept; larger batches replay by reading the grids again (0: never)
 
 
 def new_record(plan, rays):
