@@ -39,7 +39,8 @@ class Adam:
             x = params[key]
             g = dr.detach(grads[key])
             if key not in self.m or dr.width(self.m[key]) != dr.width(g):
-                self.m[key], self.v[key] = dr.zeros(mi.Float, dr.width(g)), dr.zeros(mi.Float, dr.width(g))
+                # opaque zeros: the first update then runs the same kernel as every later one
+                self.m[key], self.v[key] = dr.opaque(mi.Float, 0.0, dr.width(g)), dr.opaque(mi.Float, 0.0, dr.width(g))
                 self.t[key] = 0
             self.t[key] += 1
             t = self.t[key]
