@@ -31,7 +31,7 @@ def run_demo(out, scene, spp=128, progress=True):
     results = {}
     for task, options in EDITS:
         t = time.perf_counter()
-        folder = run_task(run, task, {**options, "progress": progress})
+        folder = run_task(run, task, options, progress=progress)
         timings[task] = time.perf_counter() - t
         with open(os.path.join(folder, "metrics.json")) as f:
             results[task] = json.load(f)

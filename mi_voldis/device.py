@@ -2,9 +2,9 @@
 
 Dr.Jit wraps a NumPy buffer without copying it and compiles the buffer's alignment into every kernel
 that reads it (``align 64`` or ``align 1`` in the LLVM IR). NumPy's buffers fall on either from one
-call to the next, so kernels fed fresh NumPy arrays every step were compiled again and again: 45-90
-ms a time, 133 times for the batch-wide kernels of one tabletop fit. :func:`from_numpy` copies the
-values into a 64-byte-aligned buffer first, so that a kernel compiles once.
+call to the next, so kernels fed fresh NumPy arrays every step would be compiled again and again
+(reports/notes.md). :func:`from_numpy` copies the values into a 64-byte-aligned buffer first, so that a
+kernel compiles once.
 """
 import drjit as dr
 import numpy as np

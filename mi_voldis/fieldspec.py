@@ -3,6 +3,7 @@ import mitsuba as mi
 import numpy as np
 
 from .activations import inverse_softplus, logit
+from .transforms import to_scalar_transform
 
 
 def box_transform(lo, hi):
@@ -21,7 +22,7 @@ def field_dict(density, color, to_world=None, density_scale=1.0):
     out = {"type": "radiance_field", "density": mi.TensorXf(density),
            "color": mi.TensorXf(np.asarray(color, np.float32)), "density_scale": float(density_scale)}
     if to_world is not None:
-        out["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, np.float32))
+        out["to_world"] = to_scalar_transform(to_world)
     return out
 
 

@@ -7,7 +7,7 @@ layout, shape (Z, Y, X, C) with x varying fastest.
 
 For lookups, the channels of all of a field's tensors are interleaved per vertex and padded to a
 power of two (``packet_width``): each of the 8 corners of a trilinear lookup is then a single
-packet gather, which on these CPUs was 2-2.6x faster in training than ``dr.Texture3f``.
+packet gather (faster in training than ``dr.Texture3f``, which pads and copies; reports/notes.md).
 """
 import drjit as dr
 import mitsuba as mi
@@ -115,4 +115,19 @@ def dilate_cells(cells):
         for dy in range(3):
             for dx in range(3):
                 out |= padded[dz:dz + z, dy:dy + y, dx:dx + x]
+    return out
+
+
+def neighbour_indices(shape):
+    """Flat indices of the 6 axis neighbours (-x, +x, -y, +y, -z, +z) of every element of a flat
+    (Z, Y, X, C) array, same channel; an element on the border is its own neighbour there (Neumann)."""
+    z, y, x, c = shape
+    i = dr.arange(mi.UInt32, x * y * z * c)
+    ch, v = i % c, i // c
+    vx, vy, vz = v % x, (v // x) % y, v // (x * y)
+    out = []
+    for coord, size, stride in ((vx, x, 1), (vy, y, x), (vz, z, x * y)):
+        for step in (-1, 1):
+            ok = (coord > 0) if step < 0 else (coord + 1 < size)
+            out.append(mi.UInt32(dr.select(ok, mi.Int32(v) + step * stride, mi.Int32(v))) * c + ch)
     return out

@@ -3,7 +3,7 @@
     python scripts/train.py DATASET --out RUN [--variant V] [--config FILE] [--set name=value ...] [--resume]
 
 Writes RUN/ (fields as .vol, scene.xml, config.json, metrics.json, previews/, training.png,
-checkpoints/). Every hyper-parameter is in mi_voldis/fit/config.py.
+checkpoints/). The settings are listed below (defined in mi_voldis/fit/config.py).
 """
 import argparse
 import json
@@ -12,10 +12,15 @@ import sys
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--variant", default="llvm_ad_rgb")
+    os.environ["MI_VOLDIS_VARIANT"] = pre.parse_known_args(argv)[0].variant  # before mi_voldis is imported
+    from mi_voldis.fit.config import FitConfig
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=FitConfig.help_text(),
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("dataset", help="dataset folder (transforms.json or LLFF poses_bounds.npy)")
     ap.add_argument("--out", required=True, help="run directory")
-    ap.add_argument("--config", help="JSON file of configuration overrides")
+    ap.add_argument("--config", help="JSON file of settings (a finished run's RUN/config.json works too)")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one setting")
     ap.add_argument("--resume", action="store_true", help="continue RUN.partial from its last checkpoint")
     ap.add_argument("--format", default="auto", choices=("auto", "llff", "transforms"), help="dataset format")
@@ -23,9 +28,7 @@ def main(argv=None):
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
     args = ap.parse_args(argv)
-    os.environ["MI_VOLDIS_VARIANT"] = args.variant
     from mi_voldis.data import DatasetError
-    from mi_voldis.fit.config import FitConfig
     from mi_voldis.fit.run import run_fit
     try:
         cfg = FitConfig.from_sources(args.config, args.set)

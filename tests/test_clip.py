@@ -13,6 +13,7 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402  (variant already selected by conftest's ``import mi_voldis``)
 import numpy as np  # noqa: E402
 
+from mi_voldis.losses import semantic_loss  # noqa: E402
 from mi_voldis.tasks.clip import ClipGuide  # noqa: E402
 
 PROMPT = "a red chair"
@@ -123,9 +124,12 @@ def test_not_a_clip_folder(model_dir, tmp_path, how):
 
 
 def test_loss_gradient(guide):
+    """semantic_loss (CLIP text and background terms, and the L2 outside the mask) against finite
+    differences, through dr.wrap into torch and back."""
     edited, background, mask = images()
+    full, _, _ = images(seed=5)
     dr.enable_grad(edited)
-    loss = guide.loss(edited, background, mask)
+    loss = semantic_loss(guide, edited, background, full, mask, 0.5, 10.0)
     assert isinstance(loss, mi.Float) and dr.width(loss) == 1
     dr.backward(loss)
     grad = dr.grad(edited).numpy()
@@ -134,7 +138,7 @@ def test_loss_gradient(guide):
     assert np.abs(grad[inside]).max() > 0
 
     def value(image):
-        return guide.loss(mi.TensorXf(image), background, mask)[0]
+        return semantic_loss(guide, mi.TensorXf(image), background, full, mask, 0.5, 10.0)[0]
 
     base, eps = edited.numpy(), 2e-2
     flat = np.abs(grad).reshape(-1)
@@ -165,7 +169,7 @@ def test_descent_raises_similarity(guide):
 
     before = similarity()
     for _ in range(8):
-        dr.backward(guide.loss(edited(), background, mask))
+        dr.backward(semantic_loss(guide, edited(), background, background, mask, 0.5, 0.0))
         opt.step()
     after = similarity()
     assert after > before + 0.05, (before, after)
@@ -175,12 +179,12 @@ def test_semantic_task_end_to_end(model_dir, tiny_run):
     """The real task on a fitted run: loads the model folder, optimises the foreground colour grid
     through render -> CLIP -> dr.wrap -> Dr.Jit, and writes the edit."""
     from mi_voldis.tasks import run_task
-    out = run_task(tiny_run, "semantic", {"prompt": PROMPT, "clip_model": str(model_dir), "steps": 12,
-                                          "progress": False})
+    out = run_task(tiny_run, "semantic", {"prompt": PROMPT, "clip_model": str(model_dir), "steps": 12},
+                   progress=False)
     m = json.loads(open(os.path.join(out, "metrics.json")).read())
     assert len(json.loads(open(os.path.join(out, "log.json")).read())) == 12
     # each step sees another view: judge on the fixed held-out grids instead of the step losses
     assert m["clip_similarity_after"] > m["clip_similarity_before"], m
     assert os.path.isfile(os.path.join(out, "fg_color_color.vol"))
     with pytest.raises(ValueError, match="nowhere"):
-        run_task(tiny_run, "semantic", {"prompt": PROMPT, "clip_model": "/nowhere", "progress": False})
+        run_task(tiny_run, "semantic", {"prompt": PROMPT, "clip_model": "/nowhere"}, progress=False)

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from helpers import random_field
 
+from mi_voldis.cameras import Camera, pixel_rays
 from mi_voldis.data import DatasetError, load_dataset
-from mi_voldis.data.cameras import mitsuba_to_opengl, pixel_rays
+from mi_voldis.data.conventions import mitsuba_to_opengl
 from mi_voldis.data.llff import write_llff
-from mi_voldis.data.types import Camera
-from mi_voldis.render.space import SceneSpace
+from mi_voldis.space import SceneSpace
 from mi_voldis.synth.rigs import look_at
 
 SHARED = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data")
@@ -123,12 +123,11 @@ def test_forward_facing_render_in_ndc_is_analytic():
     cams = [Camera(look_at([0.1 * k, 0.0, -3.0], [0.0, 0.0, 0.0]), 50.0, 24, 18) for k in range(3)]
     from mi_voldis.data.scene_box import average_pose
     ref = average_pose(cams)
-    props = SceneSpace("ndc", ref, 1.0, (2.0, 2.5)).properties()
+    props = SceneSpace("ndc", ref, 1.0, (2.0, 2.5)).integrator_properties()
     integ = mi.load_dict({"type": "voldis", "samples": 64, "mode": "full",
                           "full": constant_field(0.8, [0.2, 0.5, 0.9], box_transform([-3, -3, -0.2], [3, 3, 0.4])),
                           "bg": constant_field(1e-9, [0, 0, 0], box_transform([-3, -3, -0.2], [3, 3, 0.4])),
-                          "ndc_to_world": mi.ScalarTransform4f(props["ndc_to_world"].astype(np.float32)),
-                          "ndc_near": 1.0, "ndc_scale_x": 2.0, "ndc_scale_y": 2.5})
+                          **props})
     o, d = pixel_rays(cams[1], np.array([2.0, 12.0, 20.0]), np.array([3.0, 9.0, 15.0]))
     o, d = mi.Point3f(*o.T), mi.Vector3f(*d.T)
     out = render_rays(integ, o, d, mi.Float(0.3, 0.6, 0.9), layers=("full",))

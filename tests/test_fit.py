@@ -29,8 +29,9 @@ def test_run_writes_everything(tiny_run):
     assert 0 < m["evaluated_samples_per_ray"] <= m["max_samples_per_ray"] and m["step_size"] > 0
     assert m["peak_rss_mib"] > 100  # Python + Mitsuba + the fields: the process's own peak, recorded by itself
     # the box was tightened inside the dataset's box
-    ds_box = json.load(open(os.path.join(m and json.load(open(os.path.join(tiny_run, "config.json")))["dataset"],
-                                         "transforms.json")))["aabb"]
+    dataset = json.load(open(os.path.join(tiny_run, "config.json")))["dataset"]
+    assert dataset["format"] == "transforms" and dataset["holdout"] == 8
+    ds_box = json.load(open(os.path.join(dataset["path"], "transforms.json")))["aabb"]
     assert np.all(np.array(m["box"]["lo"]) >= np.array(ds_box[0]) - 1e-9)
     assert np.all(np.array(m["box"]["hi"]) <= np.array(ds_box[1]) + 1e-9)
 
@@ -41,7 +42,7 @@ def test_scene_xml_renders_the_fitted_fields(tiny_run):
     from mi_voldis.export import render_channels
     scene = mi.load_file(os.path.join(tiny_run, "scene.xml"))
     cfg = json.load(open(os.path.join(tiny_run, "config.json")))
-    ds = load_dataset(cfg["dataset"])
+    ds = load_dataset(cfg["dataset"]["path"])
     assert len(scene.sensors()) == len(ds.test)
     direct = render_camera(scene.integrator(), ds.cameras[ds.test[0]], ("full",))["full"][0]
     m = json.load(open(os.path.join(tiny_run, "metrics.json")))
@@ -52,8 +53,8 @@ def test_scene_xml_renders_the_fitted_fields(tiny_run):
 
 
 def test_peak_rss_follows_this_process_not_its_parent():
-    from mi_voldis.fit.report import peak_rss_mib
-    code = ("import numpy as np; from mi_voldis.fit.report import peak_rss_mib; a = np.ones(50_000_000); "
+    from mi_voldis.io.run_folder import peak_rss_mib
+    code = ("import numpy as np; from mi_voldis.io.run_folder import peak_rss_mib; a = np.ones(50_000_000); "
             "print(peak_rss_mib())")
     big = np.ones(250_000_000)  # 2 GB in the parent: a forked child's ru_maxrss would include it
     assert peak_rss_mib() >= big.nbytes / 2**20
@@ -63,23 +64,35 @@ def test_peak_rss_follows_this_process_not_its_parent():
 
 
 def test_bad_config_is_refused(tmp_path):
-    with pytest.raises(ValueError, match="unknown configuration key"):
+    with pytest.raises(ValueError, match="unknown setting stepz"):
         FitConfig.from_sources(None, ["stepz=3"])
     with pytest.raises(ValueError, match="name=value"):
         FitConfig.from_sources(None, ["steps_full"])
-    for item, message in (("batch_tile=0", "batch_tile must be a whole number >= 1, got 0"),
-                          ("batch_rays=1.5", "batch_rays must be a whole number >= 1, got 1.5"),
+    for item, message in (("batch_tile=0", "--set batch_tile=0: batch_tile must be a number >= 1, got 0"),
+                          ("batch_rays=1.5", "batch_rays must be a whole number, got 1.5"),
                           ("step_voxels=-1", "step_voxels must be a number > 0, got -1"),
-                          ("lr_color=\"fast\"", "lr_color must be a number > 0, got 'fast'")):
+                          ("lr_color=\"fast\"", "lr_color must be a number, got \"fast\"")):
         with pytest.raises(ValueError, match=re.escape(message)):
             FitConfig.from_sources(None, [item])
     bad = tmp_path / "cfg.json"
     bad.write_text('{"batch_tile": 0}')
-    with pytest.raises(ValueError, match=re.escape(f"{bad}: configuration: batch_tile must be")):
+    with pytest.raises(ValueError, match=re.escape(f"{bad}: batch_tile must be")):
         FitConfig.from_sources(str(bad))
     bad.write_text('{"batch_tile": ')
-    with pytest.raises(ValueError, match=re.escape(f"{bad}: Expecting value")):
+    with pytest.raises(ValueError, match=re.escape(f"{bad}: not valid JSON (Expecting value")):
         FitConfig.from_sources(str(bad))
+
+
+def test_settings_round_trip_and_help(tiny_run):
+    """A finished run's config.json is a valid --config (its dataset record is skipped) and gives back
+    the settings it was fitted with; --help lists every setting with its default."""
+    cfg = FitConfig.from_sources(os.path.join(tiny_run, "config.json"))
+    assert cfg.steps_full == 60 and cfg.resolution_schedule == [[0, 12], [20, 20]]
+    text = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--help"], capture_output=True,
+                          text=True, check=True).stdout
+    for name in FitConfig.names():
+        assert f"  {name} = " in text, name
+    assert "steps_full = 800" in text
 
 
 def test_train_script_errors_name_the_dataset(tmp_path):
@@ -114,10 +127,37 @@ def test_resume_after_kill(tiny_dataset, tmp_path):
 def test_render_script_from_dataset_cameras(tiny_run, tmp_path):
     cfg = json.load(open(os.path.join(tiny_run, "config.json")))
     run = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "render.py"),
-                          os.path.join(tiny_run, "scene.xml"), "--cameras", cfg["dataset"], "--split", "test",
+                          os.path.join(tiny_run, "scene.xml"), "--cameras", cfg["dataset"]["path"], "--split", "test",
                           "--out", str(tmp_path / "views")], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     from mi_voldis.data import load_dataset
-    ds = load_dataset(cfg["dataset"])
+    ds = load_dataset(cfg["dataset"]["path"])
     written = sorted(f for f in os.listdir(tmp_path / "views") if f.endswith(".exr"))
     assert written == sorted(os.path.splitext(ds.names[v])[0] + ".exr" for v in ds.test)
+
+
+@pytest.mark.parametrize("item, message", [
+    ("resolution_schedule=[[0,0]]", "resolution_schedule must be a non-empty list of [step, vertices] pairs"),
+    ("resolution_schedule=[]", "resolution_schedule must be"),
+    ("resolution_schedule=[[5,32]]", "the first at step 0"),
+    ("resolution_schedule=[[0,32],[10,8],[10,16]]", "steps increasing"),
+    ("lr_final_ratio=-1", "lr_final_ratio must be a number > 0 and <= 1, got -1"),
+    ("density_init_alpha=0", "density_init_alpha must be a number > 0"),
+    ("steps_bg=-5", "steps_bg must be a number >= 0, got -5"),
+    ("hull_min_views=2", "hull_min_views must be a number > 0 and <= 1, got 2"),
+    ("object_alpha=-1", "object_alpha must be"),
+    ("occupancy_resolution=-1", "occupancy_resolution must be a number >= 0"),
+    ("tighten_margin=-1", "tighten_margin must be a number >= 0"),
+    ("sh_degree=2", 'sh_degree must be one of "auto", 0, 1, got 2'),
+    ("bg_strategy=\"magic\"", 'bg_strategy must be one of "refit", "scratch"'),
+])
+def test_settings_are_validated_where_they_are_defined(item, message):
+    with pytest.raises(ValueError, match=re.escape(f"--set {item}: ") + ".*" + re.escape(message)):
+        FitConfig.from_sources(None, [item])
+
+
+def test_config_file_must_hold_an_object(tmp_path):
+    path = tmp_path / "list.json"
+    path.write_text("[1, 2]")
+    with pytest.raises(ValueError, match=re.escape(f"{path}: settings must be a JSON object")):
+        FitConfig.from_sources(str(path))

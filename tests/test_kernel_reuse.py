@@ -7,8 +7,8 @@ import pytest
 
 from mi_voldis.data import load_dataset
 from mi_voldis.device import ALIGN, aligned, from_numpy
-from mi_voldis.fit.raybank import RayBank
 from mi_voldis.optim.adam import Adam
+from mi_voldis.raybank import RayBank
 
 
 @pytest.fixture

@@ -109,3 +109,20 @@ def test_removal_mode_returns_background():
     names = ortho_scene(spec).integrator().aov_names()
     bg = np.stack([img[..., 3 + names.index(f"bg.{c}")] for c in "RGB"], axis=-1)
     np.testing.assert_array_equal(img[..., :3], bg)
+
+
+def test_sources_each_rule_needs_are_the_ones_it_reads():
+    """needed_sources comes from the rules themselves: the lookup keys compose() reads."""
+    from mi_voldis.render.mixing import RULES, Sources, needed_sources
+    moved = Sources("full@p", "bg@p", "full@q", "bg@q")
+    assert needed_sources("paper", moved, ("full",)) == {"full@p"}
+    assert needed_sources("paper", moved, ("bg",)) == {"bg@p"}
+    assert needed_sources("paper", moved, ("fg",)) == {"full@q", "bg@q"}
+    for rule in RULES:
+        assert needed_sources(rule, moved, ("composite",)) == {"bg@p", "full@q", "bg@q"}, rule
+    camouflage = Sources("full@p", "bg@p", "full@p", "bg@p", fg_color="cam@q")
+    assert needed_sources("c4", camouflage, ("composite",)) == {"bg@p", "full@p", "cam@q"}
+    residual = Sources("full@p", "bg@p", "full@p", "bg@p", residual="res@p")
+    assert needed_sources("paper", residual, ("full", "res")) == {"full@p", "res@p"}
+    with pytest.raises(ValueError, match="unknown composition rule 'c9'"):
+        needed_sources("c9", moved, ("composite",))

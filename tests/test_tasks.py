@@ -32,7 +32,7 @@ def falling(log):
 
 
 def test_removal_is_the_background(tiny_run):
-    out = run_task(tiny_run, "removal", {"progress": False})
+    out = run_task(tiny_run, "removal", progress=False)
     m = metrics(out)
     assert set(m["methods"]) == {"volume", "telea", "ns"}
     run = FittedRun(tiny_run)
@@ -45,8 +45,8 @@ def test_removal_is_the_background(tiny_run):
 
 
 def test_identity_transform_equals_the_original(tiny_run):
-    out = run_task(tiny_run, "transform", {"progress": False, "scale": 1.0, "rotate": "y:0",
-                                           "translate": "0,0,0", "composition": "c4"})
+    out = run_task(tiny_run, "transform", {"scale": 1.0, "rotate": "y:0", "translate": [0, 0, 0],
+                                           "composition": "c4"}, progress=False)
     run = FittedRun(tiny_run)
     cam = run.dataset.cameras[run.dataset.test[0]]
     moved = render_camera(mi.load_file(os.path.join(out, "scene.xml")).integrator(), cam, ("composite",))
@@ -56,7 +56,7 @@ def test_identity_transform_equals_the_original(tiny_run):
 
 
 def test_transform_against_ground_truth_table(tiny_run):
-    out = run_task(tiny_run, "transform", {"progress": False, "use_dataset_transform": True})
+    out = run_task(tiny_run, "transform", {"use_dataset_transform": True}, progress=False)
     m = metrics(out)
     assert m["ground_truth"] and all(np.isfinite(v["psnr"]) for v in m["rules_vs_ground_truth"].values())
     run = FittedRun(tiny_run)
@@ -66,7 +66,7 @@ def test_transform_against_ground_truth_table(tiny_run):
 
 
 def test_camouflage_keeps_depth_and_approaches_background(tiny_run):
-    out = run_task(tiny_run, "camouflage", {"progress": False, "steps": 30})
+    out = run_task(tiny_run, "camouflage", {"steps": 30}, progress=False)
     m = metrics(out)
     assert m["max_depth_change"] == 0.0  # foreground weights fixed: depth unchanged by construction
     assert np.isfinite(m["psnr_to_background_after"]) and np.isfinite(m["psnr_to_background_before"])
@@ -78,7 +78,7 @@ def test_camouflage_keeps_depth_and_approaches_background(tiny_run):
 
 
 def test_nonneg_residual_only_adds_light(tiny_run):
-    out = run_task(tiny_run, "nonneg", {"progress": False, "steps": 30})
+    out = run_task(tiny_run, "nonneg", {"steps": 30}, progress=False)
     m = metrics(out)
     assert m["min_residual"] >= 0.0
     assert falling(json.load(open(os.path.join(out, "log.json"))))
@@ -97,11 +97,11 @@ def test_unknown_task_and_missing_run(tiny_run, tmp_path):
     with pytest.raises(ValueError, match="not a fitted run"):
         run_task(str(tmp_path), "removal")
     with pytest.raises(ValueError, match="--prompt"):
-        run_task(tiny_run, "semantic", {"progress": False})
+        run_task(tiny_run, "semantic", progress=False)
     before = sorted(os.listdir(tiny_run))
     for key in ("steps", "checkpoint_every"):
-        with pytest.raises(ValueError, match=f"{key} must be at least 1, got 0"):
-            run_task(tiny_run, "camouflage", {key: 0, "progress": False})
+        with pytest.raises(ValueError, match=f"{key} must be a number >= 1, got 0"):
+            run_task(tiny_run, "camouflage", {key: 0}, progress=False)
     assert sorted(os.listdir(tiny_run)) == before  # refused before anything was written
 
 
@@ -134,3 +134,33 @@ def test_task_resumes_after_kill(tiny_run, tmp_path):
     b = metrics(out)["psnr_to_background_after"]
     assert abs(a - b) < 1.0, (a, b)
     assert falling(json.load(open(out / "log.json")))
+
+
+def test_task_settings_from_the_command_line(tiny_run, tmp_path):
+    """optimize.py: --set overrides a task setting, the task writes its settings to config.json, that
+    file is accepted again by --config, bad values are refused naming the key, and --help lists every
+    setting of every task with its default."""
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+
+    from mi_voldis.tasks.settings import SETTINGS
+    script = [sys.executable, os.path.join(ROOT, "scripts", "optimize.py")]
+    done = subprocess.run(script + [tiny_run, "--task", "camouflage", "--quiet", "--set", "steps=4",
+                                    "--set", "lr=0.2"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    written = json.load(open(os.path.join(tiny_run, "camouflage", "config.json")))
+    assert written["steps"] == 4 and written["lr"] == 0.2 and written["task"] == "camouflage"
+    assert len(json.load(open(os.path.join(tiny_run, "camouflage", "log.json")))) == 4
+    from mi_voldis.tasks.settings import CamouflageSettings
+    again = CamouflageSettings.from_sources(os.path.join(tiny_run, "camouflage", "config.json"))
+    assert again.steps == 4 and again.lr == 0.2
+    bad = subprocess.run(script + [tiny_run, "--task", "camouflage", "--set", "lr=-1"], capture_output=True,
+                         text=True)
+    assert bad.returncode == 1 and "lr must be a number > 0, got -1" in bad.stderr and "Traceback" not in bad.stderr
+    text = subprocess.run(script + ["--help"], capture_output=True, text=True, check=True).stdout
+    for task, cls in SETTINGS.items():
+        assert f"{task} settings" in text
+        for name in cls.names():
+            assert f"  {name} = " in text, (task, name)

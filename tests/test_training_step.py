@@ -9,11 +9,12 @@ import pytest
 from helpers import field_dict
 
 from mi_voldis import grid
-from mi_voldis.fit import grids
 from mi_voldis.fit.config import FitConfig
-from mi_voldis.fit.problem import FieldFit, PackedParameters
-from mi_voldis.fit.raybank import tile_pixels
+from mi_voldis.fit.problem import FieldFit
 from mi_voldis.optim.adam import Adam
+from mi_voldis.optim.parameters import PackedParameters
+from mi_voldis.raybank import tile_pixels
+from mi_voldis.regularizers import tv_gradient
 
 
 def random_field(shape=(3, 4, 5), channels=3, seed=0):
@@ -71,13 +72,13 @@ def test_packed_regularisers_match_the_tensor_formulas():
     cfg = FitConfig(tv_every=2, tv_density=1e-2, tv_color=3e-3, sparsity=1e-1)
     params = PackedParameters({"full": field})
     hull = mi.Float((np.arange(d.size) % 3 != 0).astype(np.float32))
-    fake = SimpleNamespace(ctx=SimpleNamespace(cfg=cfg), roles=("full",), params=params, hull=hull,
+    fake = SimpleNamespace(inputs=SimpleNamespace(cfg=cfg), roles=("full",), params=params, hull=hull,
                            integrator=SimpleNamespace(fields={"full": field}))
     grads = FieldFit.extra_gradients(fake, 4, {"full.packed": dr.zeros(mi.Float, dr.width(field.packed))})
     got_d, got_c = grid.unpack(grads["full.packed"], [1, 12], d.shape[:3])
     td, tc = mi.TensorXf(d), mi.TensorXf(c)
-    want_d = (cfg.sparsity / d.size) / (1 + np.exp(-d.ravel())) + 2 * cfg.tv_density * np.array(grids.laplacian(td))
-    want_c = 2 * cfg.tv_color * np.array(grids.laplacian(tc))
+    want_d = (cfg.sparsity / d.size) / (1 + np.exp(-d.ravel())) + 2 * cfg.tv_density * np.array(tv_gradient(td))
+    want_c = 2 * cfg.tv_color * np.array(tv_gradient(tc))
     mask = np.array(hull)
     np.testing.assert_allclose(np.array(got_d).ravel(), want_d * mask, rtol=1e-5, atol=1e-9)
     np.testing.assert_allclose(np.array(got_c).ravel(), want_c * np.repeat(mask, 12), rtol=1e-5, atol=1e-9)

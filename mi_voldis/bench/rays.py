@@ -9,7 +9,8 @@ same draws for the Dr.Jit march and the PyTorch reference.
 """
 import numpy as np
 
-from ..fit.raybank import tile_pixels
+from ..cameras import film_to_camera
+from ..raybank import tile_pixels
 
 KINDS = ("random", "tiles")
 VIEWS, SIZE, FOV, TILE = 100, 256, 45.0, 4
@@ -25,22 +26,23 @@ def bench_rays(kind, n, seed):
         tile = TILE
         anchors = rng.integers(0, VIEWS * SIZE * SIZE, -(-n // (tile * tile)))
         view, pixel = np.divmod(tile_pixels(rng, anchors, tile, SIZE, SIZE)[:n], SIZE * SIZE)
-        back, right, up = _cameras()
-        scale = np.tan(np.radians(FOV) / 2)
-        sx = (2 * (pixel % SIZE + rng.random(n)) / SIZE - 1) * scale
-        sy = (2 * (pixel // SIZE + rng.random(n)) / SIZE - 1) * scale
-        o = 3.0 * back[view]
-        d = -back[view] + sx[:, None] * right[view] + sy[:, None] * up[view]
+        frames = _frames()
+        t = 2 * np.tan(np.radians(FOV) / 2)
+        u, v = (pixel % SIZE + rng.random(n)) / SIZE, (pixel // SIZE + rng.random(n)) / SIZE
+        x, y = film_to_camera(u, v, t, t, 0.0, 0.0)
+        o = -3.0 * frames[view, :, 2]
+        d = np.einsum("nij,nj->ni", frames[view], np.stack([x, y, np.ones_like(x)], axis=-1))
     else:
         raise ValueError(f"ray kind must be one of {KINDS}, got '{kind}'")
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     return o.astype(np.float32), d.astype(np.float32), rng.uniform(0, 1, n).astype(np.float32)
 
 
-def _cameras():
-    """Unit vectors (back, right, up) of the benchmark's cameras, fixed for every seed."""
-    back = np.random.default_rng(12345).normal(size=(VIEWS, 3))
-    back /= np.linalg.norm(back, axis=1, keepdims=True)
-    right = np.cross([0.0, 0.0, 1.0], -back)
-    right /= np.linalg.norm(right, axis=1, keepdims=True)
-    return back, right, np.cross(-back, right)
+def _frames():
+    """Camera-to-world rotations (Mitsuba frame: columns left, up, forward) of the benchmark's cameras,
+    on the sphere of radius 3 looking at the centre, fixed for every seed: (VIEWS, 3, 3)."""
+    forward = np.random.default_rng(12345).normal(size=(VIEWS, 3))
+    forward /= -np.linalg.norm(forward, axis=1, keepdims=True)
+    left = np.cross([0.0, 0.0, 1.0], forward)
+    left /= np.linalg.norm(left, axis=1, keepdims=True)
+    return np.stack([left, np.cross(forward, left), forward], axis=-1)

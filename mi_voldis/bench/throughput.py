@@ -12,8 +12,8 @@ import numpy as np
 
 from ..device import from_numpy
 from ..fieldspec import box_transform, field_dict
-from ..fit.problem import PackedParameters
 from ..optim.adam import Adam
+from ..optim.parameters import PackedParameters
 from ..render import march
 from ..render.rays import render_rays
 from .rays import bench_rays
@@ -81,8 +81,8 @@ def step_functions(resolution, samples, batch, channels=3, fields=("full",), ray
 def interleaved(impls, steps, warmup, rounds=2):
     """Time several implementations in alternating blocks (a block of each, ``rounds`` times), so that
     the load of a shared machine falls on all of them alike. Each block starts with untimed steps
-    (``warmup[name]`` in the first round, one later): step by step alternation measured Dr.Jit
-    25-40% slower than alone right after PyTorch steps (12.4-13.1 -> 8.0-9.3 Msps, 128^3 training).
+    (``warmup[name]`` in the first round, one later): Dr.Jit runs slower right after PyTorch steps
+    than alone (reports/notes.md), so blocks, not single steps, alternate.
     ``impls``: {name: {phase: f(seed) -> samples}}; ``steps``: timed steps of each, over all rounds.
     Returns {name: {phase: {"seconds": median seconds per step, "msps": million samples per second
     at that median}}}."""

@@ -3,9 +3,9 @@ import os
 
 from .llff import load_llff
 from .transforms_json import load_transforms
-from .types import Camera, Dataset, DatasetError, SceneBox
+from .types import Dataset, DatasetError
 
-__all__ = ["Camera", "Dataset", "DatasetError", "SceneBox", "load_dataset"]
+__all__ = ["Dataset", "DatasetError", "load_dataset"]
 
 
 def load_dataset(root, fmt="auto", holdout=8, factor=None):

@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-from .cameras import camera_from_intrinsics, llff_to_mitsuba, mitsuba_to_llff, rigid_error
+from .conventions import camera_from_intrinsics, llff_to_mitsuba, mitsuba_to_llff, rigid_error
 from .images import check_masks, check_sizes, list_images, read_image, read_mask
 from .scene_box import ndc_box
 from .types import Dataset, DatasetError

@@ -1,9 +1,8 @@
 """Scene boxes from camera layouts: a world box for 360-degree captures, NDC for forward-facing ones."""
 import numpy as np
 
-from ..render.space import SceneSpace
-from .cameras import pixel_rays
-from .types import SceneBox
+from ..cameras import pixel_rays
+from ..space import SceneBox, SceneSpace
 
 
 def look_at_point(cameras):
@@ -75,10 +74,3 @@ def ndc_box(cameras, near, far, z_max=0.999):
     lo[:2], hi[:2] = lo[:2] - pad[:2], hi[:2] + pad[:2]
     lo[2], hi[2] = -1.0, z_max
     return SceneBox("ndc", lo, hi, ref, near, scale)
-
-
-def scene_space(box):
-    """The :class:`SceneSpace` of a :class:`SceneBox`."""
-    if box.kind == "world":
-        return SceneSpace()
-    return SceneSpace("ndc", box.ndc_to_world, box.ndc_near, box.ndc_scale)

@@ -16,10 +16,11 @@ import os
 
 import numpy as np
 
-from .cameras import camera_from_intrinsics, opengl_to_mitsuba, rigid_error
+from ..space import SceneBox
+from .conventions import camera_from_intrinsics, opengl_to_mitsuba, rigid_error
 from .images import IMAGE_EXTENSIONS, check_masks, check_sizes, has_alpha, read_coverage, read_image, read_mask
 from .scene_box import is_forward_facing, ndc_box, world_box
-from .types import Dataset, DatasetError, SceneBox
+from .types import Dataset, DatasetError
 
 # Frame keys read elsewhere with another meaning: refusing them beats guessing.
 AMBIGUOUS_FRAME_KEYS = {

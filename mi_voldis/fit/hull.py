@@ -6,19 +6,8 @@ mask in at least a fraction ``min_fraction`` of the views that see it, not neces
 """
 import numpy as np
 
+from ..cameras import project
 from ..metrics import dilate
-
-
-def project(camera, points):
-    """Pixel coordinates (x, y) and camera-frame depth of world points under a Mitsuba camera."""
-    inv = np.linalg.inv(np.asarray(camera.to_world, np.float64))
-    pc = points @ inv[:3, :3].T + inv[:3, 3]
-    t = 2 * np.tan(np.radians(camera.fov_x) / 2)
-    z = pc[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        px = camera.width * (0.5 - camera.principal[0] - pc[:, 0] / (z * t))
-        py = camera.height * (0.5 - camera.principal[1] - pc[:, 1] / (z * t * camera.height / camera.width))
-    return px, py, z
 
 
 def visual_hull(points, cameras, masks, dilation_px, min_fraction):

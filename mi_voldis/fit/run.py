@@ -1,77 +1,73 @@
-"""A fitting run from the command line: stage, fit, write, then swap the run directory into place.
+"""A fitting run: stage, fit, write, then swap the run folder into place (:mod:`mi_voldis.io.run_folder`).
 
-Everything is written into RUN.partial/ (checkpoints included) and RUN.partial is renamed to RUN
-only when complete, so RUN is never half-overwritten; ``resume`` continues from
+RUN/ holds the fields (``.vol``), ``scene.xml`` (renders them through ``mi.load_file``),
+``config.json`` (the settings and the dataset they were fitted on), ``metrics.json``, ``log.json``,
+``training.png``, ``previews/`` and ``checkpoints/``. ``resume`` continues from
 RUN.partial/checkpoints/last.npz after a crash or kill -9.
 """
 import os
-import shutil
 import time
 
 import numpy as np
 
 from ..data import load_dataset
-from . import report
+from ..io.run_folder import peak_rss_mib, staged, write_json
+from ..plots import plot_log
+from ..scene import integrator_properties, write_scene
 from .config import FitConfig
+from .fields import fit_integrator, occupancy_sigma, sample_step
+from .report import evaluate, write_previews
 from .train import fit
 
 PREVIEW = "previews"
-
-
-def staging(out):
-    return out.rstrip("/") + ".partial"
+CHECKPOINT = os.path.join("checkpoints", "last.npz")
 
 
 def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto", holdout=8):
+    """Fit the dataset at ``dataset_path`` into the run folder ``out``; returns the metrics."""
     cfg = cfg or FitConfig()
-    stage = staging(out)
-    if resume and not os.path.isdir(stage):
-        raise ValueError(f"{stage}: nothing to resume (no staged run)")
-    if not resume:
-        shutil.rmtree(stage, ignore_errors=True)
-    os.makedirs(stage, exist_ok=True)
-    dataset = load_dataset(dataset_path, fmt, holdout)
-    report.write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": os.path.abspath(dataset_path)})
-    t0 = time.perf_counter()
-    ctx = fit(dataset, stage, cfg, resume=resume, progress=progress)
-    fit_seconds = time.perf_counter() - t0
-
-    bodies = report.write_fields(ctx, stage)
-    integrator = ctx.build_integrator()
-    if cfg.occupancy_resolution:
-        integrator.update_occupancy(cfg.occupancy_resolution, ctx.occupancy_sigma())
-    summary, rows, renders = report.evaluate(ctx, integrator)
-    report.write_run_scene(ctx, stage, bodies, list(dataset.test))
-    report.write_previews(os.path.join(stage, PREVIEW), renders, list(dataset.test[: cfg.preview_views]))
-    report.plot_log(os.path.join(stage, "training.png"), ctx.log, f"{dataset.name}: loss and PSNR against time")
-    train_rows = [r for r in ctx.log if "samples" in r]
-    metrics = {
-        "dataset": dataset.name, "views": {"train": len(dataset.train), "test": len(dataset.test)},
-        "held_out": summary, "per_view": rows,
-        "seconds": {"fit": fit_seconds, **{f"phase_{k}": v for k, v in ctx.phase_times.items()}},
-        "peak_rss_mib": report.peak_rss_mib(),
-        "msps_mean": float(np.mean([r["msps"] for r in train_rows])) if train_rows else None,
-        "evaluated_samples_per_ray": float(np.mean([r["samples"] for r in train_rows[-50:]]) / cfg.batch_rays)
-        if train_rows else None,
-        "max_samples_per_ray": cfg.max_samples, "step_size": ctx.step_size(),
-        "grid": {r: list(s.shape) for r, s in ctx.states.items()},
-        "sh_degree": ctx.states["full"].sh_degree, "sh_choice": ctx.sh_choice,
-        "box": {"kind": dataset.box.kind, "lo": ctx.lo.tolist(), "hi": ctx.hi.tolist()},
-        "occupied_fraction": integrator.occupancy.fraction if integrator.occupancy is not None else None,
-        "empty_bg_color_fraction": getattr(ctx, "empty_color_fraction", None),
-        "bg_strategy": cfg.bg_strategy,
-    }
-    report.write_json(os.path.join(stage, "metrics.json"), metrics)
-    report.write_json(os.path.join(stage, "log.json"), ctx.log)
-    commit(stage, out)
+    with staged(out, resume) as stage:
+        dataset = load_dataset(dataset_path, fmt, holdout)
+        record = {"path": os.path.abspath(dataset_path), "format": dataset.meta["format"], "holdout": holdout}
+        write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": record})
+        t0 = time.perf_counter()
+        inputs, state = fit(dataset, os.path.join(stage, CHECKPOINT), cfg, resume=resume, progress=progress)
+        fit_seconds = time.perf_counter() - t0
+        metrics = write_run(stage, inputs, state, fit_seconds)
     return metrics
 
 
-def commit(stage, out):
-    """Replace ``out`` by the finished ``stage`` with renames only."""
-    old = out.rstrip("/") + ".old"
-    shutil.rmtree(old, ignore_errors=True)
-    if os.path.exists(out):
-        os.replace(out, old)
-    os.replace(stage, out)
-    shutil.rmtree(old, ignore_errors=True)
+def write_run(stage, inputs, state, fit_seconds):
+    """Everything a finished fit writes beside its checkpoint; returns the metrics."""
+    ds, cfg = inputs.ds, inputs.cfg
+    integrator = fit_integrator(inputs, state)
+    if cfg.occupancy_resolution:
+        integrator.update_occupancy(cfg.occupancy_resolution, occupancy_sigma(cfg, state))
+    summary, rows, renders = evaluate(ds, integrator, cfg.hull_dilation)
+    props = integrator_properties(inputs.space, samples=cfg.max_samples, step_size=float(sample_step(cfg, state)),
+                                  occupancy_resolution=cfg.occupancy_resolution,
+                                  occupancy_threshold=float(occupancy_sigma(cfg, state)))
+    write_scene(stage, {role: state.fields[role] for role in ("full", "bg")}, props,
+                [ds.cameras[v] for v in ds.test])
+    write_previews(os.path.join(stage, PREVIEW), renders, list(ds.test[: cfg.preview_views]))
+    plot_log(os.path.join(stage, "training.png"), state.log, f"{ds.name}: loss and PSNR against time")
+    train_rows = [r for r in state.log if "samples" in r]
+    metrics = {
+        "dataset": ds.name, "views": {"train": len(ds.train), "test": len(ds.test)},
+        "held_out": summary, "per_view": rows,
+        "seconds": {"fit": fit_seconds, **{f"phase_{k}": v for k, v in state.phase_times.items()}},
+        "peak_rss_mib": peak_rss_mib(),
+        "msps_mean": float(np.mean([r["msps"] for r in train_rows])) if train_rows else None,
+        "evaluated_samples_per_ray": float(np.mean([r["samples"] for r in train_rows[-50:]]) / cfg.batch_rays)
+        if train_rows else None,
+        "max_samples_per_ray": cfg.max_samples, "step_size": sample_step(cfg, state),
+        "grid": {r: list(s.shape) for r, s in state.fields.items()},
+        "sh_degree": state.fields["full"].sh_degree, "sh_choice": state.sh_choice,
+        "box": {"kind": ds.box.kind, "lo": state.lo.tolist(), "hi": state.hi.tolist()},
+        "occupied_fraction": integrator.occupancy.fraction if integrator.occupancy is not None else None,
+        "empty_bg_color_fraction": state.empty_color_fraction,
+        "bg_strategy": cfg.bg_strategy,
+    }
+    write_json(os.path.join(stage, "metrics.json"), metrics)
+    write_json(os.path.join(stage, "log.json"), state.log)
+    return metrics

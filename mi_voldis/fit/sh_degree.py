@@ -3,40 +3,43 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..field_state import FieldState, with_sh_degree
 from ..metrics import psnr
 from ..optim.adam import Adam
 from ..optim.loop import optimize
-from . import grids
+from ..raybank import RayBank
+from ..render.views import render_camera
+from .fields import fit_integrator
 from .problem import FieldFit
-from .raybank import RayBank
 
 
-def choose_sh_degree(ctx, roles, cfg):
+def choose_sh_degree(inputs, state, roles):
     """Degree 1 only if view dependence pays. With the current geometry fixed, colour is fitted from
     scratch at degree 0 and at degree 1 on most training views, and the two are compared on the
     others (every 4th training view, unseen by both colour fits)."""
-    train = np.asarray(ctx.ds.train)
+    cfg, ds = inputs.cfg, inputs.ds
+    train = np.asarray(ds.train)
     val, fit = train[::4], np.setdiff1d(train, train[::4])
-    fit_bank, val_bank = RayBank(ctx.ds, fit), RayBank(ctx.ds, val)
-    kept = {r: ctx.states[r] for r in roles}
+    fit_bank = RayBank(ds, fit)
+    kept = {r: state.fields[r] for r in roles}
     scores = {}
     for degree in (0, 1):
         for r in roles:
-            colour = grids.with_sh_degree(kept[r], degree).color
-            ctx.states[r] = grids.FieldState(kept[r].density, dr.zeros(mi.TensorXf, colour.shape), kept[r].to_world,
-                                             kept[r].density_scale)
+            colour = with_sh_degree(kept[r], degree).color
+            state.fields[r] = FieldState(kept[r].density, dr.zeros(mi.TensorXf, colour.shape), kept[r].to_world,
+                                         kept[r].density_scale)
         adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2)
-        trial = FieldFit(ctx, roles, ("full",), fit_bank, phase=10 + degree, schedule=False, adam=adam,
+        trial = FieldFit(inputs, state, roles, ("full",), fit_bank, phase=10 + degree, schedule=False, adam=adam,
                          rates=(0.0, cfg.lr_color * 2))  # colour only: geometry stays fixed
-        optimize(trial, adam, cfg.sh_trial_steps, final_ratio=0.3, desc=f"SH degree {degree} trial",
-                 progress=ctx.progress)
+        optimize(trial, adam, steps=cfg.sh_trial_steps, final_ratio=0.3, desc=f"SH degree {degree} trial",
+                 progress=inputs.progress)
         trial.sync_states()
-        integ = ctx.build_integrator()
-        scores[degree] = float(np.mean([psnr(ctx.render_view(integ, val_bank, k, ("full",))["full"][0],
-                                             ctx.ds.images[v]) for k, v in enumerate(val)]))
+        integ = fit_integrator(inputs, state)
+        scores[degree] = float(np.mean([psnr(render_camera(integ, ds.cameras[v], ("full",))["full"][0], ds.images[v])
+                                        for v in val]))
     degree = int(scores[1] - scores[0] >= cfg.sh_gain_db)
     for r in roles:  # keep the main fit's colour, at the chosen degree
-        ctx.states[r] = grids.with_sh_degree(kept[r], degree)
-    ctx.sh_choice = {"val_psnr_degree0": scores[0], "val_psnr_degree1": scores[1], "degree": degree,
-                     "val_views": val.tolist()}
+        state.fields[r] = with_sh_degree(kept[r], degree)
+    state.sh_choice = {"val_psnr_degree0": scores[0], "val_psnr_degree1": scores[1], "degree": degree,
+                       "val_views": val.tolist()}
     return degree

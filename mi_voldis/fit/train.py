@@ -1,9 +1,10 @@
 """Fit the full-scene and background radiance fields of a dataset (paper Sec. 3.1).
 
-    L_full = sum_i ||x_i - x^_i||^2 over all pixels,   L_bg = sum_i ||(1 - m_i)(x_i - x^_i)||^2,
+    L_full = sum_i ||x_i - x^_i||^2 over all pixels,   L_bg = sum_i ||(1 - m_i)(x_i - x^_i)||^2
 
-both through the ``voldis`` integrator's renders (same sampler, quadrature and mixing as every later
-task) and Dr.Jit's reverse-mode AD, with Adam on raw voxel grids.
+(:func:`mi_voldis.losses.full_loss`, :func:`mi_voldis.losses.background_loss`), both through the
+``voldis`` integrator's renders (same sampler, quadrature and mixing as every later task) and Dr.Jit's
+reverse-mode AD, with Adam on raw voxel grids.
 
 Phases (``bg_strategy``):
 
@@ -22,90 +23,101 @@ import time
 import drjit as dr
 import numpy as np
 
+from ..field_state import FieldState
 from ..metrics import psnr
+from ..optim.adam import Adam
 from ..optim.loop import optimize
-from . import grids
+from ..raybank import RayBank
+from ..render.views import render_camera
 from .background import background_ray_pool, background_regions, clear_empty_background_color, start_background
-from .problem import FieldFit, FitContext
-from .raybank import RayBank
+from .fields import FitInputs, init_fields
+from .problem import FieldFit
 from .sh_degree import choose_sh_degree
+from .state import FitState
 
 
-def fit(dataset, run_dir, cfg, resume=False, progress=True):
-    """Fit ``dataset`` into ``run_dir`` (a staging folder; see :mod:`mi_voldis.fit.run`). Returns the
-    context holding the fitted states, the log and the phase times."""
-    ctx = FitContext(dataset, cfg, run_dir)
-    ctx.progress = progress
-    meta = ctx.load() if resume else None
-    if resume and meta is None:
-        raise ValueError(f"{run_dir}: no checkpoint to resume from")
-    start_phase, start_step = (meta["phase"], meta["step"]) if meta else ("full", 0)
+def fit(dataset, checkpoint, cfg, resume=False, progress=True):
+    """Fit ``dataset``, checkpointing to the file ``checkpoint``. Returns the inputs and the final
+    :class:`FitState` (fields, log, phase times)."""
+    inputs = FitInputs.of(dataset, cfg, checkpoint, progress)
+    adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
+    state = FitState.load(checkpoint, adam) if resume else None
+    if resume and state is None:
+        raise ValueError(f"{checkpoint}: no checkpoint to resume from")
     has_masks = dataset.masks is not None
     scratch = cfg.bg_strategy == "scratch" and has_masks
-    if cfg.bg_strategy not in ("refit", "scratch"):
-        raise ValueError(f"bg_strategy must be 'refit' or 'scratch', got '{cfg.bg_strategy}'")
     roles = ("full", "bg") if scratch else ("full",)
-    if meta is None:
-        ctx.init_fields(roles, 0 if cfg.sh_degree in ("auto", 0, "0") else int(cfg.sh_degree))
+    if state is None:
+        state = FitState(np.asarray(dataset.box.lo, np.float64), np.asarray(dataset.box.hi, np.float64), adam)
+        init_fields(inputs, state, roles, 0 if cfg.sh_degree in ("auto", 0) else int(cfg.sh_degree))
 
-    def checkpoint(phase):
-        return lambda step: ctx.save(phase, step)
+    def checkpoint_at(phase):
+        return lambda step: state.save(checkpoint, phase, step)
 
-    if start_phase == "full":
-        problem = FieldFit(ctx, roles, roles, ctx.bank)
+    if state.phase == "full":
+        fit_full(inputs, state, roles, scratch, checkpoint_at("full"))
+        state.adam.reset()
+        state.save(checkpoint, "bg", 0)
+
+    if state.phase == "bg" and has_masks and not scratch:
         t0 = time.perf_counter()
-        sh_step = cfg.tighten_at_step or cfg.resolution_schedule[-1][0]
-        eval_fn = make_eval(ctx, problem)
-        if cfg.sh_degree == "auto" and start_step < sh_step:
-            optimize(problem, ctx.adam, sh_step, start_step, cfg.lr_final_ratio ** (sh_step / cfg.steps_full),
-                     ctx.log, "full (coarse)", checkpoint("full"), cfg.checkpoint_every, eval_fn, cfg.eval_every,
-                     progress)
-            problem.sync_states()
-            choose_sh_degree(ctx, roles, cfg)
-            ctx.adam.reset()
-            problem.rebuild()
-            start_step = sh_step
-        optimize(problem, ctx.adam, cfg.steps_full, start_step, cfg.lr_final_ratio, ctx.log,
-                 "full" if not scratch else "full + bg", checkpoint("full"), cfg.checkpoint_every, eval_fn,
-                 cfg.eval_every, progress)
-        problem.sync_states()
-        ctx.phase_times["full"] = ctx.phase_times.get("full", 0.0) + time.perf_counter() - t0
-        start_phase, start_step = "bg", 0
-        ctx.adam.reset()
-        ctx.save("bg", 0)
-
-    if start_phase == "bg" and has_masks and not scratch:
-        t0 = time.perf_counter()
-        if "bg" not in ctx.states or ctx.hull_points is None:
-            start_background(ctx)
-        hull, _, obj = background_regions(ctx)
+        if "bg" not in state.fields or state.hull_points is None:
+            start_background(inputs, state)
+        hull, _, obj = background_regions(inputs, state)
         free = dr.select(obj, 0.0, hull)  # refit the hull but the object's own voxels, which stay empty
-        pool = background_ray_pool(dataset, ctx.bank, cfg.bg_ray_dilation)
-        problem = FieldFit(ctx, ("bg",), ("bg",), ctx.bank, pool=pool, hull=free, phase=1, schedule=False)
-        optimize(problem, ctx.adam, cfg.steps_bg, start_step, cfg.lr_final_ratio, ctx.log, "bg refit",
-                 checkpoint("bg"), cfg.checkpoint_every, None, 0, progress)
+        pool = background_ray_pool(dataset, inputs.bank, cfg.bg_ray_dilation)
+        problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
+                           schedule=False)
+        optimize(problem, state.adam, steps=cfg.steps_bg, start=state.step, final_ratio=cfg.lr_final_ratio,
+                 log=state.log, desc="bg refit", checkpoint=checkpoint_at("bg"),
+                 checkpoint_every=cfg.checkpoint_every, progress=progress)
         problem.sync_states()
-        ctx.phase_times["bg"] = ctx.phase_times.get("bg", 0.0) + time.perf_counter() - t0
-    if "bg" not in ctx.states:  # no masks: nothing to disentangle, the background is the full scene
-        full = ctx.states["full"]
-        ctx.states["bg"] = grids.FieldState(full.density, full.color, full.to_world.copy(), full.density_scale)
+        state.phase_times["bg"] = state.phase_times.get("bg", 0.0) + time.perf_counter() - t0
+    if "bg" not in state.fields:  # no masks: nothing to disentangle, the background is the full scene
+        full = state.fields["full"]
+        state.fields["bg"] = FieldState(full.density, full.color, full.to_world.copy(), full.density_scale)
     if has_masks:
-        ctx.empty_color_fraction = clear_empty_background_color(ctx)
-    ctx.save("done", 0)
-    return ctx
+        state.empty_color_fraction = clear_empty_background_color(inputs, state)
+    state.save(checkpoint, "done", 0)
+    return inputs, state
 
 
-def make_eval(ctx, problem):
-    """Held-out PSNR of the full field on a few test views, for the PSNR-vs-time log."""
-    views = list(ctx.ds.test[: ctx.cfg.eval_views])
+def fit_full(inputs, state, roles, scratch, checkpoint):
+    """The full-scene phase (with the background too for ``scratch``), from ``state.step``; with
+    ``sh_degree`` 'auto' the degree is chosen once the coarse geometry stands (tightening step)."""
+    cfg = inputs.cfg
+    problem = FieldFit(inputs, state, roles, roles, inputs.bank)
+    t0 = time.perf_counter()
+    start = state.step
+    sh_step = cfg.tighten_at_step or cfg.resolution_schedule[-1][0]
+    eval_fn = held_out_psnr(inputs, problem)
+    common = dict(log=state.log, checkpoint=checkpoint, checkpoint_every=cfg.checkpoint_every, eval_fn=eval_fn,
+                  eval_every=cfg.eval_every, progress=inputs.progress)
+    if cfg.sh_degree == "auto" and start < sh_step:
+        optimize(problem, state.adam, steps=sh_step, start=start,
+                 final_ratio=cfg.lr_final_ratio ** (sh_step / cfg.steps_full), desc="full (coarse)", **common)
+        problem.sync_states()
+        choose_sh_degree(inputs, state, roles)
+        state.adam.reset()
+        problem.rebuild()
+        start = sh_step
+    optimize(problem, state.adam, steps=cfg.steps_full, start=start, final_ratio=cfg.lr_final_ratio,
+             desc="full" if not scratch else "full + bg", **common)
+    problem.sync_states()
+    state.phase_times["full"] = state.phase_times.get("full", 0.0) + time.perf_counter() - t0
+
+
+def held_out_psnr(inputs, problem):
+    """Held-out PSNR of the full field on a few test views, for the PSNR-vs-time log (None without
+    test views)."""
+    views = list(inputs.ds.test[: inputs.cfg.eval_views])
     if not views:
         return None
-    bank = RayBank(ctx.ds, views)
+    bank = RayBank(inputs.ds, views)
 
     def evaluate(step):
         problem.sync_states()
-        integ = problem.integrator
-        values = [psnr(ctx.render_view(integ, bank, k, ("full",), problem.samples)["full"][0], ctx.ds.images[v])
+        values = [psnr(render_camera(problem.integrator, bank.cams[k], ("full",))["full"][0], inputs.ds.images[v])
                   for k, v in enumerate(views)]
         return {"test_psnr": float(np.mean(values))}
     return evaluate

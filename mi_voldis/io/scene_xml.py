@@ -44,20 +44,24 @@ def sensor_xml(to_world, fov_x, width, height, spp=1, principal=(0.0, 0.0)):
             f'<string name="pixel_format" value="rgb"/><rfilter type="box"/></film></sensor>')
 
 
-def write_scene(path, fields, options=None, sensors=(), transforms=None):
+def property_xml(key, value):
+    """One integrator property as XML: booleans, integers, floats, strings, and transforms (a
+    ``mi.ScalarTransform4f`` or a 4x4 matrix)."""
+    if hasattr(value, "matrix") or np.shape(value) == (4, 4):
+        return _transform(key, np.array(value.matrix if hasattr(value, "matrix") else value, np.float64))
+    kind = "boolean" if isinstance(value, bool) else "integer" if isinstance(value, int) else \
+        "float" if isinstance(value, float) else "string"
+    text = str(value).lower() if isinstance(value, bool) else f"{value:.9g}" if kind == "float" else str(value)
+    return f'<{kind} name="{key}" value={quoteattr(text)}/>'
+
+
+def write_scene(path, fields, properties=None, sensors=()):
     """Write a scene with a ``voldis`` integrator.
 
-    ``fields``: role -> ``<medium>`` body from :func:`save_field`; ``options``: integrator
-    properties (composition, mode, samples); ``transforms``: e.g. ``{"fg_to_world": matrix}``;
-    ``sensors``: XML strings from :func:`sensor_xml`."""
-    body = []
-    for key, value in (options or {}).items():
-        kind = "boolean" if isinstance(value, bool) else "integer" if isinstance(value, int) else \
-            "float" if isinstance(value, float) else "string"
-        text = str(value).lower() if isinstance(value, bool) else f"{value:.9g}" if kind == "float" else str(value)
-        body.append(f'<{kind} name="{key}" value={quoteattr(text)}/>')
-    for key, m in (transforms or {}).items():
-        body.append(_transform(key, m))
+    ``fields``: role -> ``<medium>`` body from :func:`save_field`; ``properties``: integrator
+    properties as for ``mi.load_dict`` (see :func:`mi_voldis.scene.build_integrator`); ``sensors``:
+    XML strings from :func:`sensor_xml`."""
+    body = [property_xml(key, value) for key, value in (properties or {}).items()]
     for role, inner in fields.items():
         body.append(f'<medium type="radiance_field" name="{role}" id="{role}">{inner}</medium>')
     xml = ['<scene version="3.0.0">', '<integrator type="voldis" id="integrator">', *body, '</integrator>',

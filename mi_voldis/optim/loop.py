@@ -12,34 +12,11 @@ A *problem* says what is optimised and how (duck-typed):
 The loop does the rest: backward pass, Adam with exponential learning-rate decay, progress bar,
 a log of loss / PSNR / time / samples per second, and checkpoints it can resume from.
 """
-import json
-import os
 import time
 
 import drjit as dr
 import numpy as np
 from tqdm import tqdm
-
-
-class Checkpoint:
-    """One file holding arrays and a JSON header, replaced atomically (a kill -9 leaves the previous one)."""
-
-    def __init__(self, path):
-        self.path = path
-
-    def save(self, arrays, meta):
-        os.makedirs(os.path.dirname(self.path), exist_ok=True)
-        tmp = self.path + ".tmp.npz"
-        np.savez(tmp, __meta__=np.frombuffer(json.dumps(meta).encode(), np.uint8), **arrays)
-        os.replace(tmp, self.path)
-
-    def load(self):
-        if not os.path.isfile(self.path):
-            return None
-        with np.load(self.path) as f:
-            meta = json.loads(bytes(f["__meta__"]).decode())
-            arrays = {k: f[k] for k in f.files if k != "__meta__"}
-        return arrays, meta
 
 
 def _flat(array):
@@ -52,7 +29,7 @@ def decay(step, steps, final_ratio):
     return final_ratio ** (step / max(steps - 1, 1))
 
 
-def optimize(problem, adam, steps, start=0, final_ratio=0.1, log=None, desc="optimise", checkpoint=None,
+def optimize(problem, adam, *, steps, start=0, final_ratio=0.1, log=None, desc="optimise", checkpoint=None,
              checkpoint_every=0, eval_fn=None, eval_every=0, progress=True):
     """Run ``problem`` from ``start`` to ``steps``. ``checkpoint(step)`` is called every
     ``checkpoint_every`` steps and at the end; ``eval_fn(step)`` -> dict every ``eval_every`` steps

@@ -8,8 +8,8 @@ import numpy as np
 from ..render import layers as layer_io
 from ..render import march, mixing
 from ..render.occupancy import Occupancy, local_to_scene
-from ..render.space import SceneSpace
-from ..transforms import is_identity, to_matrix
+from ..space import SceneSpace
+from ..transforms import is_identity, to_matrix, to_scalar_transform
 
 __variant__ = mi.variant()
 
@@ -65,7 +65,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
        - |transform|, |float|
        - Forward-facing scenes: sample and store the fields in the NDC space of this reference camera
          (Mitsuba frame), near plane and scales 2f/W, 2f/H; the fields' ``to_world`` then maps the unit
-         cube into NDC space. See :mod:`mi_voldis.render.space`. (Default: world space)
+         cube into NDC space. See :mod:`mi_voldis.space`. (Default: world space)
 
     Every ray is sampled at one set of distances t_i = t_0 + (i + u) dt over the union of the fields'
     boxes, with one jitter u per ray; the fields are evaluated at those points (foreground lookups at
@@ -77,7 +77,9 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
     premultiplied colour, alpha = sum of the layer's weights, and expected ray distance.
 
     Differentiable in reverse mode (``mi.render`` + ``dr.backward``): the adjoint replays the march
-    (path replay, constant memory) and accumulates into every field's ``density`` and ``color``.
+    (path replay, from the lookup values the primal recorded while they fit
+    :data:`mi_voldis.render.march.RECORD_BYTES`, else reading the grids again) and accumulates into
+    every field's ``density`` and ``color``.
 
     .. tabs::
 
@@ -131,11 +133,22 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         self._plans = {}
         self.occupancy = None
         self.occupancy_threshold = float(props.get("occupancy_threshold", 0.01))
-        resolution = int(props.get("occupancy_resolution", 0))
-        if resolution < 0:
-            raise ValueError(f"voldis: occupancy_resolution must be >= 0, got {resolution}")
-        if resolution:
-            self.update_occupancy(resolution)
+        self.occupancy_resolution = int(props.get("occupancy_resolution", 0))
+        if self.occupancy_resolution < 0:
+            raise ValueError(f"voldis: occupancy_resolution must be >= 0, got {self.occupancy_resolution}")
+        if self.occupancy_resolution:
+            self.update_occupancy(self.occupancy_resolution)
+
+    def properties(self):
+        """This integrator's properties (all but the fields), as :func:`mi_voldis.scene.build_integrator`
+        and :func:`mi_voldis.scene.write_scene` take them: change some to build a variant of it."""
+        props = {"composition": self.composition, "mode": self.mode, "samples": self.samples,
+                 "step_size": self.step_size, "occupancy_resolution": self.occupancy_resolution,
+                 "occupancy_threshold": self.occupancy_threshold, **self.space.integrator_properties()}
+        for name, m in (("fg_to_world", self.fg_to_world), ("bg_to_world", self.bg_to_world)):
+            if not is_identity(m):
+                props[name] = to_scalar_transform(m)
+        return props
 
     def update_occupancy(self, resolution, threshold=None, extra=None):
         """Rebuild the occupancy grid from the fields' current densities (``resolution`` 0: off).
@@ -185,7 +198,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         key = (layers, samples or self.samples)
         if key not in self._plans:
             lookups, sources = self._lookups()
-            needed = mixing.needed_sources(sources, self.composition, layers)
+            needed = mixing.needed_sources(self.composition, sources, layers)
             boxes = tuple(lk.to_local for lk in lookups
                           if lk.key != sources.fg_color and lk.warp is None)  # density-carrying boxes
             self._plans[key] = march.Plan(tuple(lk for lk in lookups if lk.key in needed), sources,
@@ -220,26 +233,29 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         return list(lookups.values()), sources
 
     # ----------------------------------------------------------------------------- sampling
-    def sample(self, mode, scene, sampler, ray, δL, δaovs, state_in, active, **kwargs):
+    def sample(self, mode, scene, sampler, ray, δL, δaovs, state_in, active, keep_record=False, **kwargs):
+        """Primal: the main image, validity, AOVs and the :class:`march.Forward` state (``keep_record``:
+        with the lookups' values for the adjoint). Backward: the adjoint of that state."""
         if mode == dr.ADMode.Forward:
             self.render_forward(scene, None)
-        plan = self.plan()
-        u = sampler.next_1d(active)
-        rays = march.prepare_rays(plan, mi.Point3f(dr.detach(ray.o)), mi.Vector3f(dr.detach(ray.d)), 0.0, ray.maxt)
         if mode == dr.ADMode.Primal:
-            acc, _ = march.primal(plan, {id(f): f.packed for f in plan.fields}, rays, u, active)
-            out = layer_io.finalize(layer_io.raw_sums(plan, acc))
+            plan = self.plan()
+            u = sampler.next_1d(active)
+            rays = march.prepare_rays(plan, mi.Point3f(dr.detach(ray.o)), mi.Vector3f(dr.detach(ray.d)), 0.0,
+                                      ray.maxt)
+            fwd = march.forward(plan, rays, u, active, keep_record)
+            out = layer_io.finalize(layer_io.raw_sums(plan, fwd.acc))
             main = out[self.mode]
             L = main[0] + out["res"][0] if "res" in out else main[0]
             aovs = [main[1], main[2]]
             for layer in self.exr_layers:
                 rgb, a, z = out[layer]
                 aovs += [rgb[0], rgb[1], rgb[2], a, z]
-            return L, rays.hit, aovs, acc
-        grads = self._layer_grads(δL, δaovs)
-        raw = layer_io.finalize_adjoint(layer_io.raw_sums(plan, state_in), grads)
-        backpropagate(plan, rays, u, active, raw, state_in)
-        return δL, rays.hit, [], None
+            return L, rays.hit, aovs, fwd
+        fwd = state_in
+        raw = layer_io.finalize_adjoint(layer_io.raw_sums(fwd.plan, fwd.acc), self._layer_grads(δL, δaovs))
+        accumulate_gradients(fwd.plan, march.backward(fwd, raw))
+        return δL, fwd.rays.hit, [], None
 
     def render_forward(self, scene, params, sensor=0, seed=0, spp=0):
         raise NotImplementedError("voldis: forward-mode differentiation is not supported; use reverse "
@@ -259,7 +275,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             δL, δaovs = film_adjoint(film, pos, weight, len(self.aov_names()), grad_in)
             args = dict(scene=scene, ray=ray, depth=mi.UInt32(0), active=mi.Bool(True))
             *_, state = self.sample(dr.ADMode.Primal, sampler=sampler.clone(), δL=None, δaovs=None,
-                                    state_in=None, **args)
+                                    state_in=None, keep_record=True, **args)
             self.sample(dr.ADMode.Backward, sampler=sampler, δL=δL, δaovs=δaovs, state_in=state, **args)
             dr.eval()
 
@@ -304,9 +320,9 @@ def film_adjoint(film, pos, weight, n_aovs, grad_in):
     return grads
 
 
-def backpropagate(plan, rays, u, active, raw_grads, acc):
-    """Adjoint march, then one AD traversal carrying its gradients to ``density``/``color``."""
-    grads = march.packed_gradients(plan, rays, u, active, raw_grads, acc)
+def accumulate_gradients(plan, grads):
+    """Hand the packed-grid gradients of :func:`march.backward` on to the fields' parameters (one AD
+    traversal through the packing to ``density`` and ``color``)."""
     with dr.resume_grad():
         for f in plan.fields:
             if grads[id(f)] is not None:

@@ -7,9 +7,11 @@ for every (chain, layer) term of :mod:`mixing`, the sums  sum_i w_i (g_i, k_i, k
 The adjoint replays the march front to back (as Mitsuba's PRB integrators do). The lookups' raw
 values at every sample can be recorded by the primal (:class:`Record`, 16 bytes per sample and
 lookup for RGB fields, kept up to RECORD_BYTES): the replay then reads them in contiguous runs
-instead of gathering the 8 grid corners again, and only the gradient scatters touch the grids
-(a 128^3 training step at 128 samples/ray: adjoint kernel 69 -> 44 ms). Without a record the
-replay reads the grids, and memory does not grow with the number of samples.
+instead of gathering the 8 grid corners again, and only the gradient scatters touch the grids.
+Without a record the replay reads the grids, and memory does not grow with the number of samples.
+
+Primal and adjoint run through one loop body (:func:`march`, as Mitsuba's ``prb_basic.py`` does), and
+one driver (:func:`forward`, :func:`backward`) serves ``mi.render`` and the ray batches of fitting.
 
 For a chain with optical depths x_i = sigma_i delta_i and an output L = sum_i w_i g_i with
 w_i = exp(-sum_{j<i} x_j) (1 - exp(-x_i)):
@@ -28,7 +30,7 @@ import numpy as np
 
 from ..transforms import apply_point, apply_vector
 from . import mixing, quadrature
-from .sampler import sample_interval
+from .intervals import sample_interval
 
 COMPONENTS = 5  # per (chain, layer) sum: premultiplied R, G, B, alpha, depth numerator
 
@@ -189,115 +191,93 @@ def _continue(i, depth, n):
     return (i < n) & (lowest < quadrature.OPTICAL_DEPTH_CUTOFF)
 
 
-def primal(plan, data, rays, u, active, record=None):
-    """Primal march. Returns ``(acc, stats)``: {"chain|layer": [R, G, B, alpha, depth-numerator]}
-    (Float arrays) and per-ray statistics (not differentiable): ``evaluated``, the samples evaluated
-    (occupied and before termination), and with the ``fg`` layer ``fg_coverage`` = sum_i max(w_fg,i, 0),
-    how much of the ray the object covers (sum_i w_fg,i = alpha_full - alpha_bg vanishes wherever an
-    opaque background lies behind the object).
+def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None):
+    """The march over a batch of rays, primal or adjoint, through one loop body.
+
+    ``mode`` ``dr.ADMode.Primal``: returns ``(acc, stats)``: {"chain|layer": [R, G, B, alpha,
+    depth-numerator]} (Float arrays) and per-ray statistics (not differentiable): ``evaluated``, the
+    samples evaluated (occupied and before termination), and with the ``fg`` layer ``fg_coverage`` =
+    sum_i max(w_fg,i, 0), how much of the ray the object covers (sum_i w_fg,i = alpha_full - alpha_bg
+    vanishes wherever an opaque background lies behind the object). A ``record`` keeps the lookups'
+    raw values.
+
+    ``mode`` ``dr.ADMode.Backward``: the path-replay adjoint; accumulates gradients into the
+    (gradient-tracked) arrays of ``data``. ``grads``: layer -> (dRGB Color3f, d_alpha,
+    d_depth_numerator), the adjoint of each layer's raw sums; ``acc``: the primal's sums for the same
+    rays and jitter; ``record``: the primal's :class:`Record`, if it kept one (the replay then reads
+    no grid values).
 
     ``data``: id(field) -> packed grid; ``rays``: from :func:`prepare_rays`; ``u``: per-ray jitter
-    in [0, 1) of the stratified samples t_i = t0 + (i + u) dt (see :func:`sample_count`); ``record``:
-    a :class:`Record` to keep the lookups' raw values in, for :func:`adjoint`."""
+    in [0, 1) of the stratified samples t_i = t0 + (i + u) dt (see :func:`sample_count`)."""
+    primal = mode == dr.ADMode.Primal
     n, dt = sample_count(plan, rays)
     delta = dt * dr.norm(rays.d_s)
     zero = dr.zeros(mi.Float, dr.width(rays.t0))
     depth = {c: mi.Float(zero) for c in plan.chains}
-    acc = {term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms}
-    i = mi.UInt32(0)
-    active = mi.Bool(active) & rays.hit
-    stats = {"evaluated": mi.Float(zero), "fg_coverage": mi.Float(zero)}
     fg_chains = (plan.sources.full_q, plan.sources.bg_q) if "fg" in plan.layers else None
-
-    def body(i, active, depth, acc, stats):
-        t = rays.t0 + (mi.Float(i) + u) * dt
-        p = rays.o_s + t * rays.d_s
-        sig, terms, occupied, lookups = _sample(plan, data, p, rays.d, active)
-        if record is not None:
-            record.write(i, lookups, active)
-        stats = dict(stats, evaluated=stats["evaluated"] + dr.select(occupied, 1.0, 0.0))
-        t = _distance(plan, rays, t, p)
-        x = {c: sig[c] * delta for c in plan.chains}
-        w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
-        for (chain, layer), (g, k) in terms.items():
+    if primal:  # loop state: the sums and the statistics
+        carry = ({term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms},
+                 {"evaluated": mi.Float(zero), "fg_coverage": mi.Float(zero)})
+    else:  # loop state: rho = <dL, sum_{j>i} w_j g_j> per chain, from the primal's sums
+        carry = {c: mi.Float(zero) for c in plan.chains}
+        for chain, layer in plan.terms:
+            g_rgb, g_a, g_d = grads[layer]
             a = acc[term_name(chain, layer)]
-            wk = w[chain] * k
-            acc[term_name(chain, layer)] = [dr.fma(w[chain], g[0], a[0]), dr.fma(w[chain], g[1], a[1]),
-                                             dr.fma(w[chain], g[2], a[2]), a[3] + wk, dr.fma(wk, t, a[4])]
-        if fg_chains is not None and fg_chains[0] != fg_chains[1]:
-            stats["fg_coverage"] = stats["fg_coverage"] + dr.maximum(w[fg_chains[0]] - w[fg_chains[1]], 0.0)
-        depth = {c: depth[c] + x[c] for c in plan.chains}
-        i = i + 1
-        return i, active & _continue(i, depth, n), depth, acc, stats
+            carry[chain] += g_rgb[0] * a[0] + g_rgb[1] * a[1] + g_rgb[2] * a[2] + g_a * a[3] + g_d * a[4]
 
-    i, active, depth, acc, stats = dr.while_loop((i, active, depth, acc, stats), lambda i, a, *_: a,
-                                                 body, label="voldis primal")
-    return acc, stats
-
-
-def adjoint(plan, data, rays, u, active, grads, acc, record=None):
-    """Path-replay adjoint: accumulates gradients into the (gradient-tracked) arrays of ``data``.
-
-    ``grads``: layer -> (dRGB Color3f, d_alpha, d_depth_numerator), the adjoint of each layer's raw
-    sums; ``acc``: the primal's per-term sums for the same rays and jitter; ``record``: the primal's
-    :class:`Record`, if it kept one (the replay then reads no grid values)."""
-    n, dt = sample_count(plan, rays)
-    delta = dt * dr.norm(rays.d_s)
-    zero = dr.zeros(mi.Float, dr.width(rays.t0))
-    depth = {c: mi.Float(zero) for c in plan.chains}
-    rho = {c: mi.Float(zero) for c in plan.chains}
-    for chain, layer in plan.terms:
-        g_rgb, g_a, g_d = grads[layer]
-        a = acc[term_name(chain, layer)]
-        rho[chain] += g_rgb[0] * a[0] + g_rgb[1] * a[1] + g_rgb[2] * a[2] + g_a * a[3] + g_d * a[4]
-    i = mi.UInt32(0)
-    active = mi.Bool(active) & rays.hit
-
-    def body(i, active, depth, rho):
+    def body(i, active, depth, carry):
         t = rays.t0 + (mi.Float(i) + u) * dt
         p = rays.o_s + t * rays.d_s
-        with dr.resume_grad():
-            raw = record.read(i, active) if record is not None else None
-            sig, terms, _, _ = _sample(plan, data, p, rays.d, active, raw)
+        with dr.resume_grad(when=not primal):
+            raw = record.read(i, active) if record is not None and not primal else None
+            sig, terms, occupied, lookups = _sample(plan, data, p, rays.d, active, raw)
             t = _distance(plan, rays, t, p)
             x = {c: sig[c] * delta for c in plan.chains}
             w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
-            value = {c: mi.Float(0.0) for c in plan.chains}
-            for (chain, layer), (g, k) in terms.items():
-                g_rgb, g_a, g_d = grads[layer]
-                value[chain] += w[chain] * (dr.dot(g_rgb, g) + k * dr.fma(g_d, t, g_a))
-            objective = mi.Float(0.0)
-            for c in plan.chains:
-                rho[c] = rho[c] - dr.detach(value[c])
-                objective += value[c] - rho[c] * x[c]
-            dr.backward_from(dr.select(active & dr.isfinite(objective), objective, 0.0))
+            if primal:
+                carry = _accumulate(plan, carry, terms, w, t, occupied, fg_chains)
+                if record is not None:
+                    record.write(i, lookups, active)
+            else:
+                carry = _backpropagate(plan, carry, terms, w, x, t, grads, active)
         depth = {c: depth[c] + dr.detach(x[c]) for c in plan.chains}
         i = i + 1
-        return i, active & _continue(i, depth, n), depth, rho
+        return i, active & _continue(i, depth, n), depth, carry
 
-    dr.while_loop((i, active, depth, rho), lambda i, a, *_: a, body, label="voldis adjoint")
+    state = (mi.UInt32(0), mi.Bool(active) & rays.hit, depth, carry)
+    _, _, _, carry = dr.while_loop(state, lambda i, a, *_: a, body,
+                                   label="voldis primal" if primal else "voldis adjoint")
+    return carry if primal else None
 
 
-def packed_gradients(plan, rays, u, active, grads, acc, record=None):
-    """Gradients of the fields' packed grids, ``{id(field): array or None}``, from the adjoint march.
+def _accumulate(plan, carry, terms, w, t, occupied, fg_chains):
+    """Primal step: add sample i's w (g, k, k t) to every term's sums; count the sample."""
+    acc, stats = dict(carry[0]), dict(carry[1])
+    for (chain, layer), (g, k) in terms.items():
+        a = acc[term_name(chain, layer)]
+        wk = w[chain] * k
+        acc[term_name(chain, layer)] = [dr.fma(w[chain], g[0], a[0]), dr.fma(w[chain], g[1], a[1]),
+                                         dr.fma(w[chain], g[2], a[2]), a[3] + wk, dr.fma(wk, t, a[4])]
+    stats["evaluated"] = stats["evaluated"] + dr.select(occupied, 1.0, 0.0)
+    if fg_chains is not None and fg_chains[0] != fg_chains[1]:
+        stats["fg_coverage"] = stats["fg_coverage"] + dr.maximum(w[fg_chains[0]] - w[fg_chains[1]], 0.0)
+    return acc, stats
 
-    The march writes into detached, gradient-tracked copies of the packed grids (of the fields whose
-    ``packed`` array tracks gradients), so the AD traversal inside the loop stops there; callers hand
-    the result on through the packing to the ``density``/``color`` tensors."""
-    with dr.resume_grad():
-        leaves = {}
-        for f in plan.fields:
-            leaf = dr.detach(f.packed)
-            if dr.grad_enabled(f.packed):
-                dr.enable_grad(leaf)
-            leaves[id(f)] = leaf
-        # Gradient scatters into arrays above the expand threshold silently fall back to atomics
-        # (2-4x slower at 128^3 on these CPUs): raise the threshold to cover the grids.
-        largest = max(dr.width(leaf) for leaf in leaves.values())
-        if dr.expand_threshold() <= largest:
-            dr.set_expand_threshold(largest + 1)
-        adjoint(plan, leaves, rays, u, active, grads, acc, record)
-        return {k: dr.grad(v) if dr.grad_enabled(v) else None for k, v in leaves.items()}
+
+def _backpropagate(plan, rho, terms, w, x, t, grads, active):
+    """Adjoint step: back-propagate <dL, w_i g_i> - rho x_i of every chain through sample i's lookups
+    (its gradient is dL/dg_i and dL/dx_i of the module docstring) and move rho past sample i."""
+    value = {c: mi.Float(0.0) for c in plan.chains}
+    for (chain, layer), (g, k) in terms.items():
+        g_rgb, g_a, g_d = grads[layer]
+        value[chain] += w[chain] * (dr.dot(g_rgb, g) + k * dr.fma(g_d, t, g_a))
+    rho = dict(rho)
+    objective = mi.Float(0.0)
+    for c in plan.chains:
+        rho[c] = rho[c] - dr.detach(value[c])
+        objective += value[c] - rho[c] * x[c]
+    dr.backward_from(dr.select(active & dr.isfinite(objective), objective, 0.0))
+    return rho
 
 
 RECORD_BYTES = 1 << 30  # largest Record kept; larger batches replay by reading the grids again (0: never)
@@ -311,3 +291,50 @@ def new_record(plan, rays):
     if Record.size(plan, count, most) > RECORD_BYTES:
         return None
     return Record(plan, count, most)
+
+
+@dataclass
+class Forward:
+    """What a primal march leaves for its adjoint: the rays, jitter, the sums and the record."""
+    plan: Plan
+    rays: Rays
+    u: object
+    active: object
+    acc: dict
+    stats: dict
+    record: Record | None
+
+
+def forward(plan, rays, u, active=True, keep_record=False):
+    """Primal march of ``rays`` (from :func:`prepare_rays`) over the fields' current values; with
+    ``keep_record`` the lookups' raw values are kept (when they fit RECORD_BYTES) for
+    :func:`backward`."""
+    record = new_record(plan, rays) if keep_record else None
+    data = {id(f): dr.detach(f.packed) for f in plan.fields}
+    acc, stats = march(dr.ADMode.Primal, plan, data, rays, u, active, record)
+    return Forward(plan, rays, u, active, acc, stats, record)
+
+
+def backward(fwd, grads):
+    """Gradients of the fields' packed grids, ``{id(field): array or None}``, from the adjoint march
+    of a :class:`Forward` with layer adjoints ``grads`` (see :func:`march`); frees its record.
+
+    The march writes into detached, gradient-tracked copies of the packed grids (of the fields whose
+    ``packed`` array tracks gradients), so the AD traversal inside the loop stops there; callers hand
+    the result on to the fields' parameters."""
+    plan = fwd.plan
+    with dr.resume_grad():
+        leaves = {}
+        for f in plan.fields:
+            leaf = dr.detach(f.packed)
+            if dr.grad_enabled(f.packed):
+                dr.enable_grad(leaf)
+            leaves[id(f)] = leaf
+        # Gradient scatters into arrays above the expand threshold silently fall back to atomics
+        # (several times slower on CPUs): raise the threshold to cover the grids.
+        largest = max(dr.width(leaf) for leaf in leaves.values())
+        if dr.expand_threshold() <= largest:
+            dr.set_expand_threshold(largest + 1)
+        march(dr.ADMode.Backward, plan, leaves, fwd.rays, fwd.u, fwd.active, fwd.record, grads, fwd.acc)
+        fwd.record = None
+        return {k: dr.grad(v) if dr.grad_enabled(v) else None for k, v in leaves.items()}

@@ -15,23 +15,20 @@ from . import march
 class _RenderRays(dr.CustomOp):
     def eval(self, tracked, plan, o, d, u, t_min, t_max):
         # ``tracked``: the packed grids that need gradients, only there to link the op into the AD graph
-        self.plan, self.u = plan, u
-        self.rays = march.prepare_rays(plan, o, d, t_min, t_max)
-        data = {id(f): dr.detach(f.packed) for f in plan.fields}
-        self.record = march.new_record(plan, self.rays) if tracked else None
-        self.acc, stats = march.primal(plan, data, self.rays, u, True, self.record)
-        self.sums = layer_io.raw_sums(self.plan, self.acc)
+        rays = march.prepare_rays(plan, o, d, t_min, t_max)
+        self.fwd = march.forward(plan, rays, u, True, keep_record=bool(tracked))
+        self.sums = layer_io.raw_sums(plan, self.fwd.acc)
         out = layer_io.finalize(self.sums)
-        out.update(stats)  # per-ray statistics, not differentiable
+        out.update(self.fwd.stats)  # per-ray statistics, not differentiable
         dr.eval(out)
         return out
 
     def backward(self):
         grad_out = self.grad_out()
-        raw = layer_io.finalize_adjoint(self.sums, {k: grad_out[k] for k in self.plan.layers})
-        grads = march.packed_gradients(self.plan, self.rays, self.u, True, raw, self.acc, self.record)
-        self.record = None
-        self.set_grad_in("tracked", tuple(grads[id(f)] for f in self.plan.fields if grads[id(f)] is not None))
+        plan = self.fwd.plan
+        raw = layer_io.finalize_adjoint(self.sums, {k: grad_out[k] for k in plan.layers})
+        grads = march.backward(self.fwd, raw)
+        self.set_grad_in("tracked", tuple(grads[id(f)] for f in plan.fields if grads[id(f)] is not None))
 
     def name(self):
         return "voldis.render_rays"
@@ -46,7 +43,7 @@ def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=
     ``{layer: (rgb, alpha, depth)}`` (premultiplied ``mi.Color3f``, ``mi.Float``, ``mi.Float``),
     differentiable with respect to the fields' ``density`` and ``color`` tensors, plus
     ``"evaluated"``: the samples evaluated per ray (occupied cells, before early termination) and
-    ``"fg_coverage"``: sum_i max(w_fg,i, 0) (see :func:`march.primal`), neither differentiable."""
+    ``"fg_coverage"``: sum_i max(w_fg,i, 0) (see :func:`march.march`), neither differentiable."""
     plan = integrator.plan(tuple(layers), samples)
     tracked = tuple(f.packed for f in plan.fields if dr.grad_enabled(f.packed))
     return dr.custom(_RenderRays, tracked, plan, mi.Point3f(o), mi.Vector3f(d), mi.Float(u), t_min, t_max)

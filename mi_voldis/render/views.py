@@ -3,7 +3,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..data.cameras import pixel_rays
+from ..cameras import pixel_rays
 from ..device import from_numpy
 from .rays import render_rays
 
@@ -11,9 +11,9 @@ CHUNK = 1 << 16  # rays per launch
 
 
 def render_camera(integrator, camera, layers=("composite", "full", "bg", "fg"), samples=None):
-    """Layers of a :class:`~mi_voldis.data.types.Camera` through pixel centres (jitter 0.5):
+    """Layers of a :class:`~mi_voldis.cameras.Camera` through pixel centres (jitter 0.5):
     ``{layer: (rgb (H, W, 3), alpha (H, W), depth (H, W))}``, display-encoded colours, plus
-    ``"fg_coverage"`` (H, W) with the ``fg`` layer (see :func:`mi_voldis.render.march.primal`)."""
+    ``"fg_coverage"`` (H, W) with the ``fg`` layer (see :func:`mi_voldis.render.march.march`)."""
     py, px = np.mgrid[0:camera.height, 0:camera.width]
     o, d = pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
     out = {layer: ([], [], []) for layer in layers}

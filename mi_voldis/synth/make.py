@@ -9,17 +9,17 @@ Deterministic for a seed.
 """
 import json
 import os
-import shutil
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 from tqdm import tqdm
 
-from ..data.cameras import mitsuba_to_opengl
+from ..data.conventions import mitsuba_to_opengl
 from ..data.llff import write_llff
 from ..io.images import linear_to_uint8, write_png
-from ..transforms import compose
+from ..io.run_folder import staged
+from ..transforms import compose, to_scalar_transform
 from . import rigs, variants
 
 PASSES = ("image", "coverage", "background", "moved")
@@ -60,7 +60,7 @@ class _Renderer:
         self.params = mi.traverse(self.scene)
 
     def render(self, camera, seed):
-        self.params["sensor.to_world"] = mi.ScalarTransform4f(np.asarray(camera.to_world, np.float32))
+        self.params["sensor.to_world"] = to_scalar_transform(camera.to_world)
         self.params["sensor.x_fov"] = float(camera.fov_x)
         self.params.update()
         with dr.suspend_grad():
@@ -106,11 +106,40 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
               "background": variants.without_object(root, prefix),
               "moved": variants.moved(root, prefix, moved_matrix)}
 
-    tmp = out.rstrip("/") + ".partial"
-    shutil.rmtree(tmp, ignore_errors=True)
-    for folder in ("images", "masks", "coverage", "backgrounds", "moved"):
-        os.makedirs(os.path.join(tmp, folder))
-    names = [f"view_{k:03d}.png" for k in range(views)]
+    with staged(out) as tmp:
+        _render_views(tmp, scene_path, scenes, cameras, split, width, height, spp, seed, progress)
+        frames = []
+        for k, (cam, name) in enumerate(zip(cameras, _names(views))):
+            frame = {"file_path": f"images/{name}", "transform_matrix": mitsuba_to_opengl(cam.to_world).tolist(),
+                     "split": split[k], "object_mask_path": f"masks/{name}", "coverage_path": f"coverage/{name}",
+                     "background_path": f"backgrounds/{name}"}
+            if split[k] == "test":
+                frame["moved_path"] = f"moved/{name}"
+            frames.append(frame)
+        meta = {"camera_angle_x": float(np.radians(cameras[0].fov_x)), "w": width, "h": height,
+                "scene": os.path.basename(scene_path), "seed": seed, "spp": spp,
+                "moved_transform": moved_matrix.tolist(), "frames": frames}
+        if rig["cameras"]["type"] == "forward":
+            bounds = depth_bounds(scenes["image"], cameras, width, height)
+            write_llff(tmp, cameras, bounds)
+            meta.update(forward_facing=True, near=float(bounds[:, 0].min()), far=float(bounds[:, 1].max()))
+        else:
+            meta.update(forward_facing=False, aabb=rig["aabb"])
+        with open(os.path.join(tmp, "transforms.json"), "w") as f:
+            json.dump(meta, f, indent=1)
+    return out
+
+
+def _names(views):
+    return [f"view_{k:03d}.png" for k in range(views)]
+
+
+def _render_views(folder, scene_path, scenes, cameras, split, width, height, spp, seed, progress):
+    """Every pass of every view into ``folder``: images, coverage and masks, backgrounds, moved."""
+    views = len(cameras)
+    for sub in ("images", "masks", "coverage", "backgrounds", "moved"):
+        os.makedirs(os.path.join(folder, sub))
+    names = _names(views)
     for p, kind in enumerate(PASSES):
         renderer = _Renderer(scenes[kind], width, height, spp)
         todo = [k for k in range(views) if kind != "moved" or split[k] == "test"]
@@ -119,32 +148,8 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
             img = renderer.render(cameras[k], seed * 1_000_003 + p * views + k)
             if kind == "coverage":
                 cov = np.round(np.clip(img.mean(axis=2), 0.0, 1.0) * 65535).astype(np.uint16)
-                write_png(os.path.join(tmp, "coverage", names[k]), cov)
-                write_png(os.path.join(tmp, "masks", names[k]), np.where(cov > 65535 / 2, 255, 0).astype(np.uint8))
+                write_png(os.path.join(folder, "coverage", names[k]), cov)
+                write_png(os.path.join(folder, "masks", names[k]), np.where(cov > 65535 / 2, 255, 0).astype(np.uint8))
             else:
-                folder = {"image": "images", "background": "backgrounds", "moved": "moved"}[kind]
-                write_png(os.path.join(tmp, folder, names[k]), linear_to_uint8(img))
-
-    frames = []
-    for k, (cam, name) in enumerate(zip(cameras, names)):
-        frame = {"file_path": f"images/{name}", "transform_matrix": mitsuba_to_opengl(cam.to_world).tolist(),
-                 "split": split[k], "object_mask_path": f"masks/{name}", "coverage_path": f"coverage/{name}",
-                 "background_path": f"backgrounds/{name}"}
-        if split[k] == "test":
-            frame["moved_path"] = f"moved/{name}"
-        frames.append(frame)
-    meta = {"camera_angle_x": float(np.radians(cameras[0].fov_x)), "w": width, "h": height,
-            "scene": os.path.basename(scene_path), "seed": seed, "spp": spp,
-            "moved_transform": moved_matrix.tolist(), "frames": frames}
-    if rig["cameras"]["type"] == "forward":
-        bounds = depth_bounds(scenes["image"], cameras, width, height)
-        write_llff(tmp, cameras, bounds)
-        meta.update(forward_facing=True, near=float(bounds[:, 0].min()), far=float(bounds[:, 1].max()))
-    else:
-        meta.update(forward_facing=False, aabb=rig["aabb"])
-    with open(os.path.join(tmp, "transforms.json"), "w") as f:
-        json.dump(meta, f, indent=1)
-    if os.path.exists(out):
-        shutil.rmtree(out)
-    os.replace(tmp, out)
-    return out
+                sub = {"image": "images", "background": "backgrounds", "moved": "moved"}[kind]
+                write_png(os.path.join(folder, sub, names[k]), linear_to_uint8(img))

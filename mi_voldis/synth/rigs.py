@@ -1,7 +1,7 @@
 """Camera rigs for synthetic datasets: an orbit (360 degrees) and a forward-facing grid (LLFF-like)."""
 import numpy as np
 
-from ..data.types import Camera
+from ..cameras import Camera
 
 
 def look_at(origin, target, up=(0.0, 1.0, 0.0)):

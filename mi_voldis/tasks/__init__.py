@@ -2,24 +2,37 @@
 
 Each reads RUN/ (from scripts/train.py) and writes RUN/<task>/: the edited volumes (.vol), scene.xml
 (renders the edit through ``mi.load_file`` after ``import mi_voldis``), layered EXRs and PNG previews
-of the held-out views, metrics.json and, for optimised tasks, loss.png. Optimised tasks all run
-through :func:`mi_voldis.optim.loop.optimize` (checkpoints, ``resume``).
+of the held-out views, config.json (its settings), metrics.json and, for optimised tasks, loss.png.
+Optimised tasks all run through :func:`mi_voldis.optim.loop.optimize` (checkpoints, ``resume``).
 """
-from . import nonneg, recolor, removal, transform
+import os
+
+from ..io.run_folder import staged
+from . import camouflage, nonneg, removal, semantic, transform
 from .base import FittedRun, TaskOutput
+from .settings import SETTINGS
 
-TASKS = {"removal": removal.run, "transform": transform.run, "camouflage": recolor.camouflage,
-         "nonneg": nonneg.run, "semantic": recolor.semantic}
+TASKS = {"removal": removal.run, "transform": transform.run, "camouflage": camouflage.run,
+         "nonneg": nonneg.run, "semantic": semantic.run}
 
 
-def run_task(run_dir, task, options=None, dataset=None):
-    """Run ``task`` on the fitted run in ``run_dir``; returns the output folder."""
+def task_settings(task, settings=None):
+    """The typed settings of ``task``: ``settings`` as given, or a dict of values over the defaults."""
     if task not in TASKS:
         raise ValueError(f"unknown task '{task}' (expected one of {', '.join(TASKS)})")
-    options = dict(options or {})
-    for key in ("steps", "checkpoint_every"):  # checked before anything is read or written
-        if options.get(key) is not None and int(options[key]) < 1:
-            raise ValueError(f"{key} must be at least 1, got {options[key]}")
+    cls = SETTINGS[task]
+    if isinstance(settings, cls):
+        settings.check()
+        return settings
+    return cls.from_sources(**dict(settings or {}))
+
+
+def run_task(run_dir, task, settings=None, dataset=None, progress=True):
+    """Run ``task`` with ``settings`` (its settings class, or a dict of values) on the fitted run in
+    ``run_dir``; returns the output folder RUN/<task>."""
+    settings = task_settings(task, settings)  # checked before anything is read or written
     run = FittedRun(run_dir, dataset)
-    output = TaskOutput(run, task, resume=bool(options.get("resume")))
-    return TASKS[task](run, output, options)
+    final = os.path.join(run.dir, task)
+    with staged(final, settings.resume) as stage:
+        TASKS[task](run, TaskOutput(run, task, settings, stage), progress)
+    return final

@@ -1,13 +1,13 @@
 """What every manipulation task shares: the fitted run it reads, edit fields, the optimisation
 problem for :func:`mi_voldis.optim.loop.optimize`, and the files a task writes.
 
-A task is only (a) which fields are free and (b) its loss; :class:`EditProblem` turns those into the
-problem the optimisation driver runs, and :class:`TaskOutput` writes RUN/<task>/ (staged and swapped
-into place like a fit, with checkpoints for ``--resume``).
+A task is only (a) which fields are free and (b) its loss (:mod:`mi_voldis.losses`);
+:class:`EditProblem` turns those into the problem the optimisation driver runs, and
+:class:`TaskOutput` writes RUN/<task>/ (staged and swapped into place like a fit, with checkpoints
+for ``resume``).
 """
 import json
 import os
-import shutil
 
 import drjit as dr
 import mitsuba as mi
@@ -16,22 +16,23 @@ import numpy as np
 from ..data import DatasetError, load_dataset
 from ..device import from_numpy
 from ..export import linear_channels, previews
-from ..fit import grids
-from ..fit.raybank import RayBank
-from ..fit.report import peak_rss_mib, plot_log, write_json
+from ..field_state import density_raw_for_alpha, init_state, shape_for
 from ..io.exr import write_exr
 from ..io.images import contact_sheet, write_png
-from ..io.scene_xml import save_field, sensor_xml, write_scene
+from ..io.run_folder import Checkpoint, peak_rss_mib, write_json
 from ..metrics import dilate
-from ..optim.loop import Checkpoint, optimize
+from ..optim.loop import optimize
+from ..plots import plot_log
+from ..raybank import RayBank
 from ..render.rays import render_rays
 from ..render.views import layer_channels, render_camera
+from ..scene import build_integrator, write_scene
 
 PREVIEW_VIEWS = 3
 
 
 class FittedRun:
-    """A fitting run directory: its dataset, fields and integrator settings."""
+    """A fitting run folder: its dataset, fields and integrator properties."""
 
     def __init__(self, run_dir, dataset=None):
         self.dir = run_dir
@@ -40,27 +41,21 @@ class FittedRun:
             raise ValueError(f"{run_dir}: not a fitted run (no scene.xml); run scripts/train.py first")
         with open(os.path.join(run_dir, "config.json")) as f:
             self.config = json.load(f)
-        dataset = dataset or self.config.get("dataset")
+        record = self.config.get("dataset") or {}
+        record = record if isinstance(record, dict) else {"path": record}
         try:
-            self.dataset = load_dataset(dataset)
+            self.dataset = load_dataset(dataset or record.get("path"), record.get("format", "auto"),
+                                        record.get("holdout", 8))
         except DatasetError as e:
             raise ValueError(f"{run_dir}: its dataset cannot be loaded ({e}); pass --dataset") from None
-        self.scene = mi.load_file(scene)
-        base = self.scene.integrator()
+        base = mi.load_file(scene).integrator()
         self.fields = dict(base.fields)
         self.space = base.space
-        self.options = {"samples": base.samples, "step_size": base.step_size, "composition": base.composition}
-        self.occupancy = (int(self.config.get("occupancy_resolution", 0)), base.occupancy_threshold)
+        self.properties = base.properties()
 
-    def integrator(self, fields=None, **props):
-        """A ``voldis`` integrator over this run's fields (plus ``fields``) with extra properties."""
-        spec = {"type": "voldis", **self.options, **self.fields, **(fields or {}), **props}
-        for key, value in self.space.properties().items():
-            spec[key] = mi.ScalarTransform4f(np.asarray(value, np.float32)) if key == "ndc_to_world" else float(value)
-        integ = mi.load_dict(spec, optimize=False)
-        if self.occupancy[0]:
-            integ.update_occupancy(*self.occupancy)
-        return integ
+    def integrator(self, fields=None, **properties):
+        """A ``voldis`` integrator over this run's fields (plus ``fields``) with changed properties."""
+        return build_integrator({**self.fields, **(fields or {})}, {**self.properties, **properties})
 
     def foreground_box(self, margin=0.1, threshold_alpha=1e-2):
         """Scene-space box around where the full and background fields differ (the object's
@@ -70,7 +65,7 @@ class FittedRun:
         if a.shape != b.shape:
             raise ValueError("full and background grids differ in shape; cannot locate the object")
         voxel = np.max(np.diag(full.to_world)[:3] / (np.array(full.shape) - 1))
-        raw = grids.density_raw_for_alpha(threshold_alpha, voxel, full.density_scale)
+        raw = density_raw_for_alpha(threshold_alpha, voxel, full.density_scale)
         diff = (np.maximum(a, b) > raw) & (np.abs(a - b) > 1e-3)
         z, y, x = np.nonzero(diff)
         corners = np.array([[0, 0, 0], [1, 1, 1]], np.float64)
@@ -86,15 +81,35 @@ class FittedRun:
         lo, hi = self.foreground_box(margin=0.0)
         return self.space.to_world_np(0.5 * (lo + hi)[None])[0]
 
+    def pixels_near_object(self, dilation):
+        """Flat pixel indices (training views, row-major) within the object masks dilated by
+        ``dilation`` of the image diagonal; None (all pixels) when the dataset has no masks."""
+        ds = self.dataset
+        if ds.masks is None:
+            return None
+        near = dilate(ds.masks[ds.train], int(np.ceil(dilation * np.hypot(*ds.size))))
+        return np.flatnonzero(near.reshape(-1)).astype(np.uint32)
+
 
 def edit_field(lo, hi, resolution, density_raw=-30.0, color_raw=0.0, channels=3, density_scale=1.0):
     """Plugin dict of a new field over the scene-space box [lo, hi] (``resolution`` vertices along
     its longest side), constant raw density and colour."""
-    shape = grids.shape_for(lo, hi, resolution)
-    state = grids.init_state(lo, hi, resolution, (int(np.sqrt(channels // 3)) - 1), density_raw, density_scale)
+    shape = shape_for(lo, hi, resolution)
+    state = init_state(lo, hi, resolution, (int(np.sqrt(channels // 3)) - 1), density_raw, density_scale)
     z, y, x = shape[::-1]
     state.color = dr.full(mi.TensorXf, color_raw, (z, y, x, channels))
     return state.plugin()
+
+
+def residual_field(run, resolution, init_alpha, init_color):
+    """A ``radiance_field`` over the object's box, faintly opaque (``init_alpha`` per half voxel) and
+    of raw colour ``init_color``, with the full field's density scale."""
+    lo, hi = run.foreground_box()
+    full = run.fields["full"]
+    voxel = float(np.max((hi - lo) / (resolution - 1)))
+    raw = density_raw_for_alpha(init_alpha, 0.5 * voxel, full.density_scale)
+    return mi.load_dict(edit_field(lo, hi, resolution, density_raw=raw, color_raw=init_color,
+                                   density_scale=full.density_scale))
 
 
 class EditProblem:
@@ -118,48 +133,21 @@ class EditProblem:
         return loss, {"samples": float(dr.sum(out["evaluated"])[0])}
 
 
-def pixels_near_object(run, dilation=0.1):
-    """Flat pixel indices (training views, row-major) within the object masks dilated by ``dilation``
-    of the image diagonal; all pixels when the dataset has no masks."""
-    ds = run.dataset
-    if ds.masks is None:
-        return None
-    near = dilate(ds.masks[ds.train], int(np.ceil(dilation * np.hypot(*ds.size))))
-    return np.flatnonzero(near.reshape(-1)).astype(np.uint32)
-
-
 class TaskOutput:
-    """RUN/<task>/, written into RUN/<task>.partial and renamed when complete."""
+    """What a task writes into its staging folder ``stage`` (RUN/<task>.partial, swapped into place as
+    RUN/<task> when the task is done; see :func:`mi_voldis.tasks.run_task`)."""
 
-    def __init__(self, run, task, resume=False):
-        self.run, self.task = run, task
-        self.final = os.path.join(run.dir, task)
-        self.dir = self.final + ".partial"
-        if resume and not os.path.isdir(self.dir):
-            raise ValueError(f"{self.dir}: nothing to resume")
-        if not resume:
-            shutil.rmtree(self.dir, ignore_errors=True)
-        os.makedirs(self.dir, exist_ok=True)
+    def __init__(self, run, task, settings, stage):
+        self.run, self.task, self.settings, self.dir = run, task, settings, stage
+        write_json(os.path.join(self.dir, "config.json"), {**settings.to_dict(), "task": task})
         self.checkpoint = Checkpoint(os.path.join(self.dir, "checkpoints", "last.npz"))
 
-    def write_scene(self, fields, options, transforms=None):
-        """Fields as .vol files and scene.xml (with a sensor per held-out view)."""
-        bodies = {role: save_field(self.dir, role, np.array(f.density), np.array(f.color), f.to_world,
-                                   f.density_scale) for role, f in fields.items()}
-        opts = {**self.run.options, "occupancy_resolution": self.run.occupancy[0],
-                "occupancy_threshold": float(self.run.occupancy[1]), **options}
-        transforms = dict(transforms or {})
-        for key, value in self.run.space.properties().items():
-            if key == "ndc_to_world":
-                transforms[key] = value
-            else:
-                opts[key] = float(value)
+    def write_scene(self, fields, **properties):
+        """The edited scene: ``fields`` as .vol files and scene.xml with the run's integrator
+        properties changed by ``properties``, a sensor per held-out view."""
         ds = self.run.dataset
-        sensors = [sensor_xml(c.to_world, c.fov_x, c.width, c.height, 1, c.principal)
-                   for c in (ds.cameras[v] for v in ds.test)]
-        path = os.path.join(self.dir, "scene.xml")
-        write_scene(path, bodies, opts, sensors, transforms)
-        return path
+        return write_scene(self.dir, fields, {**self.run.properties, **properties},
+                           [ds.cameras[v] for v in ds.test])
 
     def write_views(self, integrator, views=None, main="composite", extra=()):
         """Layered EXR and PNG previews of held-out views; returns {view: layers}."""
@@ -180,25 +168,19 @@ class TaskOutput:
         return renders
 
     def finish(self, metrics, log=None):
+        """Write the metrics (and the optimisation log with its plot)."""
         if log:
             plot_log(os.path.join(self.dir, "loss.png"), log, f"{self.task}: loss against time")
             write_json(os.path.join(self.dir, "log.json"), log)
         write_json(os.path.join(self.dir, "metrics.json"), {**metrics, "peak_rss_mib": peak_rss_mib()})
-        old = self.final + ".old"
-        shutil.rmtree(old, ignore_errors=True)
-        if os.path.exists(self.final):
-            os.replace(self.final, old)
-        os.replace(self.dir, self.final)
-        shutil.rmtree(old, ignore_errors=True)
-        return self.final
 
 
-def run_optimisation(output, problem, adam, steps, desc, options, final_ratio=0.1):
-    """Optimise ``problem`` with checkpoints in ``output`` every ``options["checkpoint_every"]`` steps
-    (default 100), resumable after a crash or kill -9 (``options["resume"]``)."""
-    every = int(options.get("checkpoint_every") or 100)
+def run_optimisation(output, problem, adam, desc, progress=True, final_ratio=0.1):
+    """Optimise ``problem`` for the task's ``steps`` with checkpoints in ``output`` every
+    ``checkpoint_every`` steps, resumable after a crash or kill -9 (``resume``)."""
+    settings = output.settings
     start, log = 0, []
-    if options.get("resume"):
+    if settings.resume:
         loaded = output.checkpoint.load()
         if loaded is not None:
             arrays, meta = loaded
@@ -214,5 +196,6 @@ def run_optimisation(output, problem, adam, steps, desc, options, final_ratio=0.
         arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
         output.checkpoint.save(arrays, {"step": step, "log": log, "adam_t": t})
 
-    optimize(problem, adam, steps, start, final_ratio, log, desc, save, every, progress=options.get("progress", True))
+    optimize(problem, adam, steps=settings.steps, start=start, final_ratio=final_ratio, log=log, desc=desc,
+             checkpoint=save, checkpoint_every=settings.checkpoint_every, progress=progress)
     return log

@@ -1,4 +1,5 @@
-"""CLIP guidance for text-driven colour edits (Benaim et al. 2022, Sec. 3.3, Eqs. 2-3).
+"""CLIP guidance for text-driven colour edits (Benaim et al. 2022, Sec. 3.3; the loss itself is
+:func:`mi_voldis.losses.semantic_loss`).
 
 A rendered image ``I`` (H x W x 3, display-encoded in [0, 1]; 128 x 128 in the paper) enters CLIP as
 
@@ -18,6 +19,7 @@ import json
 import os
 
 import drjit as dr
+import mitsuba as mi
 import numpy as np
 import torch
 import torch.nn.functional as F
@@ -68,11 +70,11 @@ def _check_folder(model_dir):
 class ClipGuide:
     """A frozen CLIP model from the local folder ``model_dir`` and the embedding of ``prompt``.
 
-    ``threads`` sets torch's intra-op thread count (process-wide); ``bg_weight`` is ``w_bg`` of
-    :meth:`loss`. Raises ``ValueError`` naming the folder when it is missing or not a loadable CLIP model.
+    ``threads`` sets torch's intra-op thread count (process-wide). Raises ``ValueError`` naming the folder
+    when it is missing or not a loadable CLIP model.
     """
 
-    def __init__(self, model_dir, prompt, threads=None, bg_weight=0.5):
+    def __init__(self, model_dir, prompt, threads=None):
         model_dir = os.fspath(model_dir)
         _check_folder(model_dir)
         if threads:
@@ -93,7 +95,6 @@ class ClipGuide:
         mean, std = image_normalisation(model_dir)
         self.mean = torch.tensor(mean, dtype=torch.float32).view(1, 3, 1, 1)
         self.std = torch.tensor(std, dtype=torch.float32).view(1, 3, 1, 1)
-        self.bg_weight = float(bg_weight)
         tokens = self.tokenizer([prompt], padding=True, truncation=True, return_tensors="pt",
                                 max_length=model.config.text_config.max_position_embeddings)
         with torch.no_grad():
@@ -113,20 +114,16 @@ class ClipGuide:
         with torch.no_grad():
             return float(self.embed(x)[0] @ self.text)
 
-    def loss(self, edited, background, mask):
-        """``L_text + w_bg * L_bg`` (mi.Float, one element), differentiable w.r.t. ``edited``:
-
-            L_text = 1 - cos(E_I(M * edited + (1 - M) * background), E_T(prompt))   (Eq. 2)
-            L_bg   = 1 - cos(E_I(edited), E_I(background))                           (Eq. 3)
-
-        ``edited``, ``background``: mi.TensorXf (H, W, 3); ``mask`` M: mi.TensorXf (H, W, 1), 1 on the
-        object. The torch part runs under ``dr.wrap``, so ``dr.backward`` reaches ``edited``.
-        """
+    def cosines(self, composite, edited, background):
+        """cos(E_I(composite), E_T(prompt)) and cos(E_I(edited), E_I(background)) as one-element
+        ``mi.Float`` each, differentiable w.r.t. ``composite`` and ``edited`` (``mi.TensorXf`` (H, W, 3)
+        in [0, 1]): the CLIP terms of :func:`mi_voldis.losses.semantic_loss`. The torch part runs
+        under ``dr.wrap``, so ``dr.backward`` reaches the Dr.Jit inputs."""
 
         @dr.wrap(source="drjit", target="torch")
-        def clip_loss(edited, background, mask):
-            composite = mask * edited + (1.0 - mask) * background
+        def cosines(composite, edited, background):
             e = self.embed(torch.stack((composite, edited, background)))
-            return (1.0 - e[0] @ self.text + self.bg_weight * (1.0 - e[1] @ e[2])).reshape(1)
+            return torch.stack((e[0] @ self.text, e[1] @ e[2]))
 
-        return clip_loss(edited, dr.detach(background), dr.detach(mask)).array
+        values = cosines(composite, edited, dr.detach(background)).array
+        return dr.gather(mi.Float, values, mi.UInt32(0)), dr.gather(mi.Float, values, mi.UInt32(1))

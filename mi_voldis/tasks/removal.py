@@ -8,7 +8,7 @@ reason to agree with itself across views; a volume does by construction).
 """
 import numpy as np
 
-from ..data.cameras import pixel_rays
+from ..cameras import pixel_rays, project
 from ..metrics import dilate, psnr, ssim
 
 
@@ -26,27 +26,22 @@ def reproject(image_a, depth_a, cam_a, cam_b):
     h, w = depth_a.shape
     py, px = np.mgrid[0:h, 0:w]
     o, d = pixel_rays(cam_a, px.ravel() + 0.5, py.ravel() + 0.5)
-    pts = o + depth_a.reshape(-1, 1) * d
-    inv = np.linalg.inv(cam_b.to_world)
-    pc = pts @ inv[:3, :3].T + inv[:3, 3]
-    t = 2 * np.tan(np.radians(cam_b.fov_x) / 2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u = cam_b.width * (0.5 - cam_b.principal[0] - pc[:, 0] / (pc[:, 2] * t))
-        v = cam_b.height * (0.5 - cam_b.principal[1] - pc[:, 1] / (pc[:, 2] * t * cam_b.height / cam_b.width))
-    ok = (pc[:, 2] > 0) & (u >= 0) & (u < cam_b.width) & (v >= 0) & (v < cam_b.height) & (depth_a.ravel() > 0)
+    u, v, z = project(cam_b, o + depth_a.reshape(-1, 1) * d)
+    ok = (z > 0) & (u >= 0) & (u < cam_b.width) & (v >= 0) & (v < cam_b.height) & (depth_a.ravel() > 0)
     out = np.full((cam_b.height, cam_b.width, 3), np.nan, np.float32)
     out[v[ok].astype(int), u[ok].astype(int)] = image_a.reshape(-1, 3)[ok]
     return out
 
 
-def run(run, output, options):
+def run(run, output, progress=True):
     ds = run.dataset
     integrator = run.integrator(mode="bg")
     renders = output.write_views(integrator, main="bg")
-    output.write_scene({"full": run.fields["full"], "bg": run.fields["bg"]}, {"mode": "bg"})
+    output.write_scene({"full": run.fields["full"], "bg": run.fields["bg"]}, mode="bg")
     if ds.masks is None:
         return output.finish({"task": "removal", "note": "dataset has no object masks: nothing to remove"})
-    dil = int(np.ceil(0.03 * np.hypot(*ds.size)))
+    dilation = output.settings.mask_dilation
+    dil = int(np.ceil(dilation * np.hypot(*ds.size)))
     methods = {"volume": {}, "telea": {}, "ns": {}}
     depth = {}
     for v in ds.test:
@@ -75,5 +70,5 @@ def run(run, output, options):
                 if target_region.any():
                     row["consistency_psnr"].append(psnr(warped[target_region], images[u][target_region]))
         rows[name] = {k: float(np.mean(vals)) if vals else None for k, vals in row.items()}
-    return output.finish({"task": "removal", "methods": rows,
-                          "note": "in-mask = inside the masks dilated by 3% of the image diagonal"})
+    output.finish({"task": "removal", "methods": rows,
+                   "note": f"in-mask = inside the masks dilated by {100 * dilation:g}% of the image diagonal"})

@@ -11,12 +11,18 @@ straight. A ray, first moved to start on the near plane, becomes o' + t' d' with
 z in [n, inf): samples uniform in t' are uniform in disparity. Quadrature then uses NDC lengths
 (delta = dt' |d'|, as NeRF does), so densities are per NDC unit; depths are reported in world units.
 Every field is evaluated at the same scene-space points, so the warp keeps samples aligned.
+
+A leaf module: datasets describe their space with a :class:`SceneBox`, rendering works in a
+:class:`SceneSpace`, and :meth:`SceneSpace.integrator_properties` is the one conversion of a space
+into ``voldis`` integrator properties (for plugin dicts and scene files alike).
 """
+from dataclasses import dataclass
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..transforms import apply_point, apply_vector
+from .transforms import apply_point, apply_vector, to_scalar_transform
 
 NDC_T_MAX = 1.0 - 1e-6  # t' = 1 is at infinity
 
@@ -86,9 +92,31 @@ class SceneSpace:
         pc = np.stack([p[:, 0] * z / self.scale[0], p[:, 1] * z / self.scale[1], z], -1)
         return pc @ self.to_world_m[:3, :3].T + self.to_world_m[:3, 3]
 
-    def properties(self):
-        """Integrator properties describing this space (empty for world space)."""
+    def integrator_properties(self):
+        """``voldis`` integrator properties describing this space (empty for world space), typed as
+        Mitsuba reads them (``mi.load_dict``; :mod:`mi_voldis.io.scene_xml` writes them as XML)."""
         if self.is_world:
             return {}
-        return {"ndc_to_world": self.to_world_m, "ndc_near": self.near,
+        return {"ndc_to_world": to_scalar_transform(self.to_world_m), "ndc_near": self.near,
                 "ndc_scale_x": self.scale[0], "ndc_scale_y": self.scale[1]}
+
+    @classmethod
+    def from_box(cls, box):
+        """The space of a :class:`SceneBox`."""
+        if box.kind == "world":
+            return cls()
+        return cls("ndc", box.ndc_to_world, box.ndc_near, box.ndc_scale)
+
+
+@dataclass
+class SceneBox:
+    """Where the fields live. ``kind`` 'world': an axis-aligned box ``lo``..``hi`` in world space.
+    ``kind`` 'ndc': forward-facing scenes; the box is in the NDC space of the reference camera
+    ``ndc_to_world`` (Mitsuba camera frame) with near plane ``ndc_near`` and scales ``ndc_scale``
+    (2 f / W, 2 f / H), as in NeRF's LLFF set-up."""
+    kind: str
+    lo: np.ndarray
+    hi: np.ndarray
+    ndc_to_world: np.ndarray | None = None
+    ndc_near: float | None = None
+    ndc_scale: tuple | None = None

@@ -1,4 +1,5 @@
-"""Camera conventions and conversions to Mitsuba's camera frame (+x left, +y up, +z forward).
+"""Camera conventions of dataset formats and their conversion to Mitsuba's camera frame (+x left, +y up,
++z forward).
 
 * OpenGL / Blender / nerfstudio ``transform_matrix``: camera-to-world, axes +x right, +y up, +z back.
 * LLFF ``poses_bounds.npy``: 3x5 per view, rotation columns [down, right, back], then the camera
@@ -6,7 +7,7 @@
 """
 import numpy as np
 
-from .types import Camera
+from ..cameras import Camera
 
 GL_TO_MI = np.diag([-1.0, 1.0, -1.0, 1.0])  # flips x (right -> left) and z (back -> forward)
 
@@ -57,18 +58,3 @@ def rigid_error(m):
     """How far the rotation part of ``m`` is from a proper rotation (max entry of R^T R - I, det)."""
     r = np.asarray(m, dtype=np.float64)[:3, :3]
     return max(np.abs(r.T @ r - np.eye(3)).max(), abs(np.linalg.det(r) - 1.0))
-
-
-def pixel_rays(camera, px, py):
-    """World rays through film positions (px, py) in pixels (pixel centres at +0.5), as Mitsuba's
-    perspective sensor generates them. Returns origins (n, 3) and unit directions (n, 3)."""
-    px, py = np.asarray(px, np.float64), np.asarray(py, np.float64)
-    t = 2 * np.tan(np.radians(camera.fov_x) / 2)
-    x = (0.5 - px / camera.width - camera.principal[0]) * t
-    y = (0.5 - py / camera.height - camera.principal[1]) * t * camera.height / camera.width
-    d = np.stack([x, y, np.ones_like(x)], axis=-1)
-    d /= np.linalg.norm(d, axis=-1, keepdims=True)
-    m = np.asarray(camera.to_world, np.float64)
-    d_world = d @ m[:3, :3].T
-    o = np.broadcast_to(m[:3, 3], d_world.shape)
-    return o.copy(), d_world

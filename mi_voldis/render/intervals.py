@@ -1,7 +1,7 @@
-"""Where along a ray the fields are sampled: one set of distances shared by every field.
+"""Ray intervals in boxes: the range [t_0, t_1] of a ray that the march samples.
 
-The samples of a ray are t_i = t_0 + (i + u) dt, i = 0..N-1, with dt = (t_1 - t_0) / N over the
-union [t_0, t_1] of the ray's intervals in all fields' boxes, and one jitter u in [0, 1) per ray.
+The march (:mod:`mi_voldis.render.march`) samples t_i = t_0 + (i + u) dt, i = 0..N-1, over the union
+[t_0, t_1] of the ray's intervals in all density-carrying boxes, with one jitter u in [0, 1) per ray.
 Every field is evaluated at exactly these points (foreground fields at T^-1 of them), which is what
 makes the per-sample differences of paper Eq. 3 meaningful.
 """

@@ -11,8 +11,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..data.cameras import pixel_rays
-from ..device import from_numpy
+from .cameras import CameraTable
+from .device import from_numpy
 
 
 class RayBank:
@@ -24,16 +24,8 @@ class RayBank:
         masks = dataset.masks[self.views] if dataset.masks is not None else np.zeros((n, h, w), bool)
         self.masks_np = masks
         self.masks = mi.Float(masks.reshape(-1).astype(np.float32))
-        cams = [dataset.cameras[v] for v in self.views]
-        # per view: rotation (9) | origin (3) | tan scale x, y | principal x, y  -> 16 floats
-        table = []
-        for c in cams:
-            m = np.asarray(c.to_world, np.float64)
-            t = 2 * np.tan(np.radians(c.fov_x) / 2)
-            table.append(np.concatenate([m[:3, :3].ravel(), m[:3, 3], [t, t * c.height / c.width],
-                                         c.principal]))
-        self.cameras = mi.Float(np.asarray(table, np.float32).ravel())
-        self.cams = cams
+        self.table = CameraTable([dataset.cameras[v] for v in self.views])
+        self.cams = self.table.cameras
 
     @property
     def pixels(self):
@@ -57,23 +49,12 @@ class RayBank:
         pix = index - view * hw
         py = pix // self.width
         px = pix - py * self.width
-        cam = dr.gather(mi.ArrayXf, self.cameras, view, shape=(16, dr.width(index)))
-        fx = (mi.Float(px) + from_numpy(mi.Float, jitter[:, 0])) / self.width
-        fy = (mi.Float(py) + from_numpy(mi.Float, jitter[:, 1])) / self.height
-        x = (0.5 - fx - cam[14]) * cam[12]
-        y = (0.5 - fy - cam[15]) * cam[13]
-        d = dr.normalize(mi.Vector3f(cam[0] * x + cam[1] * y + cam[2], cam[3] * x + cam[4] * y + cam[5],
-                                     cam[6] * x + cam[7] * y + cam[8]))
-        o = mi.Point3f(cam[9], cam[10], cam[11])
+        u = (mi.Float(px) + from_numpy(mi.Float, jitter[:, 0])) / self.width
+        v = (mi.Float(py) + from_numpy(mi.Float, jitter[:, 1])) / self.height
+        o, d = self.table.rays(view, u, v)
         color = dr.gather(mi.Color3f, self.colors, index)
         mask = dr.gather(mi.Float, self.masks, index)
         return o, d, color, mask
-
-    def view_rays(self, k):
-        """Rays through the pixel centres of view ``k`` of this bank (row-major), NumPy arrays."""
-        cam = self.cams[k]
-        py, px = np.mgrid[0:self.height, 0:self.width]
-        return pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
 
 
 def tile_pixels(rng, anchors, tile, height, width):

@@ -1,8 +1,8 @@
-"""Field grids during fitting: initialisation, resampling, box tightening, visual hull, regularisers.
+"""The values of a field while it is fitted or edited: raw grids and their box, made, resampled, re-degreed.
 
-A field's state is a :class:`FieldState` of NumPy-free Dr.Jit tensors (raw density and colour) and a
-box (unit cube -> scene space matrix). Resampling evaluates the trilinear interpolant of the old
-raw grids at the new vertices, so a finer grid over the same box represents the same field.
+A field's state is a :class:`FieldState` of Dr.Jit tensors (raw density and colour) and a box (unit
+cube -> scene space matrix). Resampling evaluates the trilinear interpolant of the old raw grids at
+the new vertices, so a finer grid over the same box represents the same field.
 """
 from dataclasses import dataclass
 
@@ -10,9 +10,10 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .. import grid
-from ..activations import inverse_softplus
-from ..fieldspec import box_transform
+from . import grid
+from .activations import inverse_softplus
+from .fieldspec import box_transform
+from .transforms import to_scalar_transform
 
 EMPTY_COLOR = -10.0  # raw colour of "black" (sigmoid(-10) = 4.5e-5)
 
@@ -35,7 +36,7 @@ class FieldState:
     def plugin(self):
         return {"type": "radiance_field", "density": self.density, "color": self.color,
                 "density_scale": float(self.density_scale),
-                "to_world": mi.ScalarTransform4f(self.to_world.astype(np.float32))}
+                "to_world": to_scalar_transform(self.to_world)}
 
 
 def shape_for(lo, hi, resolution):
@@ -117,48 +118,3 @@ def with_sh_degree(state, degree):
     for k in range(min(c, want)):
         dr.scatter(out, dr.gather(mi.Float, state.color.array, idx * c + k), idx * want + k)
     return FieldState(state.density, mi.TensorXf(out, (z, y, x, want)), state.to_world, state.density_scale)
-
-
-def laplacian(tensor):
-    """Gradient of the total variation sum_v sum_axis (t[v + e] - t[v])^2 / n, for every channel:
-    2 (2 t[v] - t[v + e] - t[v - e]) summed over axes (Neumann border), divided by n."""
-    z, y, x, c = tensor.shape
-    n = x * y * z * c
-    i = dr.arange(mi.UInt32, n)
-    ch = i % c
-    v = i // c
-    vx, vy, vz = v % x, (v // x) % y, v // (x * y)
-    t = tensor.array
-    out = dr.zeros(mi.Float, n)
-    centre = dr.gather(mi.Float, t, i)
-    for coord, size, stride in ((vx, x, 1), (vy, y, x), (vz, z, x * y)):
-        for step in (-1, 1):
-            ok = (coord > 0) if step < 0 else (coord + 1 < size)
-            j = dr.select(ok, (mi.Int32(v) + step * stride), mi.Int32(v))
-            out += 2.0 * (centre - dr.gather(mi.Float, t, mi.UInt32(j) * c + ch))
-    return out * (1.0 / n)
-
-
-
-def harmonic_fill(tensor, region, iterations=300):
-    """Values of ``tensor`` inside ``region`` (Float per vertex, 1 = fill) replaced by the harmonic
-    extension of the values around it (Jacobi iterations of the 6-neighbour Laplace equation, every
-    channel), a smooth volumetric inpainting: surfaces crossing the region continue through it."""
-    z, y, x, c = tensor.shape
-    n = x * y * z
-    i = dr.arange(mi.UInt32, n * c)
-    ch, v = i % c, i // c
-    vx, vy, vz = v % x, (v // x) % y, v // (x * y)
-    fill = dr.gather(mi.Float, region, v) > 0
-    values = dr.select(fill, 0.0, tensor.array)
-    neighbours = []
-    for coord, size, stride in ((vx, x, 1), (vy, y, x), (vz, z, x * y)):
-        for step in (-1, 1):
-            ok = (coord > 0) if step < 0 else (coord + 1 < size)
-            neighbours.append(mi.UInt32(dr.select(ok, mi.Int32(v) + step * stride, mi.Int32(v))) * c + ch)
-    dr.eval(neighbours, values)
-    for _ in range(iterations):
-        mean = sum(dr.gather(mi.Float, values, j) for j in neighbours) * (1.0 / 6.0)
-        values = dr.select(fill, mean, values)
-        dr.eval(values)
-    return mi.TensorXf(values, tensor.shape)

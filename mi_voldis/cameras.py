@@ -1,0 +1,111 @@
+"""Pinhole cameras in Mitsuba's convention: the camera type, rays through pixels, and the projection of
+world points to pixels. A leaf module: datasets, rendering, fitting and tasks all import it.
+
+The pinhole model, written once (:func:`film_to_camera` and its inverse :func:`camera_to_film`): a
+film position (u, v) in [0, 1]^2 (u = px / W, v = py / H, pixel centres at +0.5) has the camera-frame
+direction
+
+    x = (0.5 - u - o_x) tan_x,   y = (0.5 - v - o_y) tan_y,   z = 1,
+
+with tan_x = 2 tan(fov_x / 2), tan_y = tan_x H / W and (o_x, o_y) Mitsuba's principal point offsets;
+Mitsuba's camera frame has +x left, +y up, +z forward. The functions take NumPy or Dr.Jit arrays.
+"""
+from dataclasses import dataclass
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from .transforms import to_scalar_transform
+
+
+@dataclass
+class Camera:
+    """A pinhole camera in Mitsuba's convention.
+
+    ``to_world``: rigid 4x4 camera-to-world matrix whose axes are Mitsuba's camera frame (+x left,
+    +y up, +z forward); ``fov_x``: horizontal field of view in degrees; ``principal``: Mitsuba's
+    ``principal_point_offset_x/y`` (principal point = film centre minus ``principal`` times the film
+    size; OpenCV's cx = W (0.5 - principal_x), cy = H (0.5 - principal_y))."""
+    to_world: np.ndarray
+    fov_x: float
+    width: int
+    height: int
+    principal: tuple = (0.0, 0.0)
+
+    @property
+    def focal(self):
+        """Focal length in pixels."""
+        return 0.5 * self.width / np.tan(np.radians(self.fov_x) / 2)
+
+    @property
+    def tan_scale(self):
+        """(tan_x, tan_y): camera-frame extent of the film at unit depth."""
+        t = 2 * np.tan(np.radians(self.fov_x) / 2)
+        return t, t * self.height / self.width
+
+    def sensor_dict(self, spp=1, near_clip=1e-4):
+        """Plugin dict of the equivalent Mitsuba ``perspective`` sensor with a box-filtered RGB film."""
+        return {"type": "perspective", "fov": float(self.fov_x), "fov_axis": "x", "near_clip": near_clip,
+                "principal_point_offset_x": float(self.principal[0]),
+                "principal_point_offset_y": float(self.principal[1]),
+                "to_world": to_scalar_transform(self.to_world),
+                "film": {"type": "hdrfilm", "width": int(self.width), "height": int(self.height),
+                         "pixel_format": "rgb", "rfilter": {"type": "box"}},
+                "sampler": {"type": "independent", "sample_count": spp}}
+
+
+def film_to_camera(u, v, tan_x, tan_y, offset_x, offset_y):
+    """Camera-frame direction (x, y, 1) through film position (u, v) (see the module docstring)."""
+    return (0.5 - u - offset_x) * tan_x, (0.5 - v - offset_y) * tan_y
+
+
+def camera_to_film(x, y, z, tan_x, tan_y, offset_x, offset_y):
+    """Film position (u, v) of the camera-frame point (x, y, z), z > 0: the inverse of
+    :func:`film_to_camera`."""
+    return 0.5 - offset_x - x / (z * tan_x), 0.5 - offset_y - y / (z * tan_y)
+
+
+def pixel_rays(camera, px, py):
+    """World rays through film positions (px, py) in pixels (pixel centres at +0.5), as Mitsuba's
+    perspective sensor generates them. Returns origins (n, 3) and unit directions (n, 3), NumPy."""
+    px, py = np.asarray(px, np.float64), np.asarray(py, np.float64)
+    x, y = film_to_camera(px / camera.width, py / camera.height, *camera.tan_scale, *camera.principal)
+    d = np.stack([x, y, np.ones_like(x)], axis=-1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    m = np.asarray(camera.to_world, np.float64)
+    d_world = d @ m[:3, :3].T
+    return np.broadcast_to(m[:3, 3], d_world.shape).copy(), d_world
+
+
+def project(camera, points):
+    """Pixel coordinates (px, py) and camera-frame depth z of world points (n, 3) (NumPy; px, py are
+    meaningless where z <= 0)."""
+    inv = np.linalg.inv(np.asarray(camera.to_world, np.float64))
+    pc = np.asarray(points, np.float64) @ inv[:3, :3].T + inv[:3, 3]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u, v = camera_to_film(pc[:, 0], pc[:, 1], pc[:, 2], *camera.tan_scale, *camera.principal)
+    return camera.width * u, camera.height * v, pc[:, 2]
+
+
+TABLE_WIDTH = 16  # floats per camera in a CameraTable: rotation (9), origin (3), tan_x, tan_y, offsets (2)
+
+
+class CameraTable:
+    """Cameras of one image size on the device, for rays of many views in one kernel (fitting)."""
+
+    def __init__(self, cameras):
+        rows = []
+        for c in cameras:
+            m = np.asarray(c.to_world, np.float64)
+            rows.append(np.concatenate([m[:3, :3].ravel(), m[:3, 3], c.tan_scale, c.principal]))
+        self.cameras = list(cameras)
+        self.data = mi.Float(np.asarray(rows, np.float32).ravel())
+
+    def rays(self, view, u, v):
+        """World rays (o, d) of camera ``view`` (UInt32 per ray) through film positions (u, v) (Float)."""
+        cam = dr.gather(mi.ArrayXf, self.data, view, shape=(TABLE_WIDTH, dr.width(view)))
+        x, y = film_to_camera(u, v, cam[12], cam[13], cam[14], cam[15])
+        d = dr.normalize(mi.Vector3f(cam[0] * x + cam[1] * y + cam[2], cam[3] * x + cam[4] * y + cam[5],
+                                     cam[6] * x + cam[7] * y + cam[8]))
+        return mi.Point3f(cam[9], cam[10], cam[11]), d

@@ -1,0 +1,69 @@
+"""What a fit has made so far, and its checkpoint: the one object that :func:`mi_voldis.fit.train.fit`
+changes, saved and restored whole so that a resumed fit continues exactly where it stopped."""
+from dataclasses import dataclass, field
+
+import mitsuba as mi
+import numpy as np
+
+from ..field_state import FieldState
+from ..io.run_folder import Checkpoint
+from ..optim.adam import Adam
+
+
+@dataclass
+class FitState:
+    """Field states by role, the scene box they live in, and the bookkeeping of the fit.
+
+    ``phase``/``step``: where the fit stands ('full', 'bg' or 'done', and the step within the phase);
+    ``occupancy_on``: empty-space skipping has started (after the box was tightened); ``hull_points``:
+    scene-space points of the object's visual hull (kept occupied while the background is refitted);
+    ``log``: one row per step; ``phase_times``: seconds per phase; ``sh_choice``: the trial fits that
+    chose the spherical-harmonic degree; ``empty_color_fraction``: background vertices whose colour was
+    cleared."""
+    lo: np.ndarray
+    hi: np.ndarray
+    adam: Adam
+    fields: dict = field(default_factory=dict)
+    phase: str = "full"
+    step: int = 0
+    occupancy_on: bool = False
+    hull_points: np.ndarray | None = None
+    log: list = field(default_factory=list)
+    phase_times: dict = field(default_factory=dict)
+    sh_choice: dict | None = None
+    empty_color_fraction: float | None = None
+
+    META = ("phase", "step", "occupancy_on", "log", "phase_times", "sh_choice", "empty_color_fraction")
+
+    def save(self, path, phase, step):
+        """Checkpoint at ``phase``/``step`` (atomically replaces ``path``)."""
+        self.phase, self.step = phase, step
+        meta = {key: getattr(self, key) for key in self.META}
+        meta.update(lo=self.lo.tolist(), hi=self.hi.tolist())
+        arrays = {}
+        for r, s in self.fields.items():
+            arrays[f"{r}/density"] = np.array(s.density)
+            arrays[f"{r}/color"] = np.array(s.color)
+            arrays[f"{r}/to_world"] = s.to_world
+            arrays[f"{r}/density_scale"] = np.array(s.density_scale)
+        adam_arrays, meta["adam_t"] = self.adam.state()
+        arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
+        if self.hull_points is not None:
+            arrays["hull_points"] = self.hull_points
+        Checkpoint(path).save(arrays, meta)
+
+    @classmethod
+    def load(cls, path, adam):
+        """The state saved at ``path`` (None when there is none); ``adam`` receives its moments."""
+        loaded = Checkpoint(path).load()
+        if loaded is None:
+            return None
+        arrays, meta = loaded
+        fields = {}
+        for r in ("full", "bg"):
+            if f"{r}/density" in arrays:
+                fields[r] = FieldState(mi.TensorXf(arrays[f"{r}/density"]), mi.TensorXf(arrays[f"{r}/color"]),
+                                       arrays[f"{r}/to_world"], float(arrays[f"{r}/density_scale"]))
+        adam.load({k[5:]: v for k, v in arrays.items() if k.startswith("adam/")}, meta["adam_t"])
+        return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields,
+                   hull_points=arrays.get("hull_points"), **{key: meta[key] for key in cls.META})

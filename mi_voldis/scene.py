@@ -1,0 +1,39 @@
+"""``voldis`` scenes from fields: the one integrator factory and the one scene-file writer that fitting,
+tasks and the Python API share.
+
+Integrator properties are a dict as ``mi.load_dict`` takes it (``samples``, ``step_size``,
+``composition``, ``mode``, occupancy, scene space, foreground transform; see the ``voldis`` plugin);
+:func:`build_integrator` loads fields with them, :func:`write_scene` writes the same fields and
+properties as ``.vol`` files and a ``scene.xml`` that ``mi.load_file`` reads back.
+"""
+import os
+
+import mitsuba as mi
+import numpy as np
+
+from .io.scene_xml import save_field, sensor_xml
+from .io.scene_xml import write_scene as write_scene_xml
+
+
+def integrator_properties(space, **options):
+    """Properties of a ``voldis`` integrator in scene space ``space`` (a :class:`mi_voldis.space.SceneSpace`)
+    plus ``options`` (``None`` values left out)."""
+    return {**space.integrator_properties(), **{k: v for k, v in options.items() if v is not None}}
+
+
+def build_integrator(fields, properties):
+    """A ``voldis`` integrator over ``fields`` (role -> ``radiance_field`` plugin dict or loaded medium)."""
+    return mi.load_dict({"type": "voldis", **properties, **fields}, optimize=False)
+
+
+def write_scene(folder, fields, properties, cameras=(), name="scene.xml"):
+    """Write ``fields`` (role -> anything with raw ``density`` and ``color`` tensors, ``to_world`` and
+    ``density_scale``: a field state or a loaded field) as ``<role>_density.vol`` / ``<role>_color.vol``
+    and ``folder/name``: a scene with these fields, the integrator ``properties`` and one sensor per
+    camera (:class:`mi_voldis.cameras.Camera`). Returns the scene file's path."""
+    bodies = {role: save_field(folder, role, np.array(f.density), np.array(f.color), f.to_world, f.density_scale)
+              for role, f in fields.items()}
+    sensors = [sensor_xml(c.to_world, c.fov_x, c.width, c.height, 1, c.principal) for c in cameras]
+    path = os.path.join(folder, name)
+    write_scene_xml(path, bodies, properties, sensors)
+    return path
