@@ -1,8 +1,11 @@
-"""The values of a field while it is fitted or edited: raw grids and their box, made, resampled, re-degreed.
+"""The values of a field while it is fitted: a brick grid (:mod:`mi_voldis.bricks`) over an axis-aligned
+box of scene space, made, carved, resampled onto finer lattices and re-degreed.
 
-A field's state is a :class:`FieldState` of Dr.Jit tensors (raw density and colour) and a box (unit
-cube -> scene space matrix). Resampling evaluates the trilinear interpolant of the old raw grids at
-the new vertices, so a finer grid over the same box represents the same field.
+A :class:`FieldState` holds the lattice's :class:`~mi_voldis.bricks.Layout` and the packed vertex data
+(density and colour coefficients interleaved per vertex, the empty brick first) as one Dr.Jit array: the
+very array the ``radiance_field`` plugin reads and Adam steps on. Resampling evaluates the trilinear
+interpolant of the old grid at the new vertices, so a finer lattice over the same box represents the
+same field; carving keeps only the bricks where some vertex has density (grown by a brick).
 """
 from dataclasses import dataclass
 
@@ -10,33 +13,54 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from . import grid
+from . import bricks
 from .activations import inverse_softplus
+from .device import from_numpy
 from .fieldspec import box_transform
+from .grid import packet_width
 from .transforms import to_scalar_transform
 
-EMPTY_COLOR = -10.0  # raw colour of "black" (sigmoid(-10) = 4.5e-5)
+SH_DEGREES = {3: 0, 12: 1, 27: 2}  # colour channels -> spherical-harmonic degree
+BRICK = 8  # vertices along a brick's edge
 
 
 @dataclass
 class FieldState:
-    density: mi.TensorXf   # (Z, Y, X, 1) raw density
-    color: mi.TensorXf     # (Z, Y, X, 3 (l+1)^2) raw colour coefficients
-    to_world: np.ndarray   # unit cube -> scene space
+    layout: bricks.Layout  # the lattice and its allocated bricks
+    data: mi.Float         # packed values, (slots * B^3) vertices x width floats, slot 0 the empty brick
+    channels: int          # 1 + colour coefficients (3 (l + 1)^2)
+    to_world: np.ndarray   # unit cube -> scene space (an axis-aligned box)
     density_scale: float = 1.0  # sigma = density_scale * softplus(raw)
 
     @property
     def shape(self):
-        return grid.grid_shape(self.density)
+        return self.layout.shape
+
+    @property
+    def width(self):
+        return packet_width(self.channels)
 
     @property
     def sh_degree(self):
-        return {3: 0, 12: 1, 27: 2}[self.color.shape[3]]
+        return SH_DEGREES[self.channels - 1]
+
+    @property
+    def vertices(self):
+        """Vertices stored (allocated bricks and the empty brick)."""
+        return self.layout.slots * self.layout.vertices_per_brick
 
     def plugin(self):
-        return {"type": "radiance_field", "density": self.density, "color": self.color,
+        """``radiance_field`` plugin dict over these very values (no copy)."""
+        return {"type": "radiance_field", "table": mi.TensorXf(self.layout.table.ravel().astype(np.float32)),
+                "data": mi.TensorXf(self.data, (self.vertices, self.width)), "channels": self.channels,
+                "vertices": mi.ScalarVector3f(*self.shape), "brick": self.layout.brick,
                 "density_scale": float(self.density_scale),
                 "to_world": to_scalar_transform(self.to_world)}
+
+    def values(self):
+        """The allocated bricks' values as NumPy (allocated * B^3, channels) (for files)."""
+        v = np.array(self.data).reshape(self.vertices, self.width)
+        return v[self.layout.vertices_per_brick:, :self.channels]
 
 
 def shape_for(lo, hi, resolution):
@@ -45,21 +69,14 @@ def shape_for(lo, hi, resolution):
     return tuple(int(max(2, round(resolution * s / size.max()))) for s in size)
 
 
-def voxel_size(state):
-    lo, hi = box_corners(state.to_world)
-    return float(np.max((hi - lo) / (np.array(state.shape) - 1)))
-
-
 def box_corners(to_world):
     return to_world[:3, 3].copy(), to_world[:3, 3] + np.diag(to_world)[:3]
 
 
-def init_state(lo, hi, resolution, sh_degree, density_raw, density_scale):
-    shape = shape_for(lo, hi, resolution)
-    z, y, x = shape[::-1]
-    density = dr.full(mi.TensorXf, density_raw, (z, y, x, 1))
-    color = dr.zeros(mi.TensorXf, (z, y, x, 3 * (sh_degree + 1) ** 2))
-    return FieldState(density, color, box_transform(lo, hi), density_scale)
+def voxel_size(state):
+    """Largest voxel edge (scene units)."""
+    lo, hi = box_corners(state.to_world)
+    return float(np.max((hi - lo) / (np.array(state.shape) - 1)))
 
 
 def density_raw_for_alpha(alpha, step, density_scale):
@@ -67,54 +84,134 @@ def density_raw_for_alpha(alpha, step, density_scale):
     return float(inverse_softplus(-np.log1p(-alpha) / step / density_scale))
 
 
+def new_field(lo, hi, resolution, sh_degree, density_raw, density_scale, brick=BRICK):
+    """A field over [lo, hi] with ``resolution`` vertices along its longest side, every brick
+    allocated, raw density ``density_raw`` and raw colour 0 everywhere."""
+    shape = shape_for(lo, hi, resolution)
+    channels = 1 + 3 * (sh_degree + 1) ** 2
+    bx, by, bz = bricks.counts(shape, brick)
+    layout = bricks.Layout(shape, brick, np.arange(1, bx * by * bz + 1, dtype=np.uint32).reshape(bz, by, bx))
+    width = packet_width(channels)
+    vertex = np.zeros(width, np.float32)
+    vertex[0] = density_raw
+    values = np.tile(vertex, (layout.slots * brick ** 3, 1))
+    values[: brick ** 3] = bricks.empty_values(width, channels)
+    return FieldState(layout, from_numpy(mi.Float, values.ravel()), channels, box_transform(lo, hi), density_scale)
+
+
+def vertex_local(state):
+    """Local (unit-cube) positions of every stored vertex (Dr.Jit Point3f, slot-major) and whether each
+    is a lattice vertex of an allocated brick (Dr.Jit Bool)."""
+    (i, j, k), inside = state.layout.device_coords()
+    x, y, z = (float(s - 1) for s in state.shape)
+    return mi.Point3f(mi.Float(i) / x, mi.Float(j) / y, mi.Float(k) / z), inside
+
+
 def vertex_positions(state):
-    """Scene-space positions of the grid vertices, (n, 3) Dr.Jit point, x fastest."""
-    sx, sy, sz = state.shape
-    idx = dr.arange(mi.UInt32, sx * sy * sz)
-    x, y, z = idx % sx, (idx // sx) % sy, idx // (sx * sy)
-    local = mi.Point3f(mi.Float(x) / (sx - 1), mi.Float(y) / (sy - 1), mi.Float(z) / (sz - 1))
+    """Scene-space positions of every stored vertex (NumPy (n, 3)) and whether each is a real one."""
+    local, inside = vertex_local(state)
+    local = np.array(local).T
     m = state.to_world
-    return mi.Point3f(*[float(m[r, 0]) * local.x + float(m[r, 1]) * local.y + float(m[r, 2]) * local.z
-                        + float(m[r, 3]) for r in range(3)])
+    return local @ m[:3, :3].T + m[:3, 3], np.array(inside)
 
 
-def resample(state, resolution=None, lo=None, hi=None, empty_raw=None):
-    """The field on a new grid: ``resolution`` along the longest side of the box [lo, hi] (default:
-    the current box). Points of the new box outside the old one get density ``empty_raw``."""
-    old_lo, old_hi = box_corners(state.to_world)
-    lo = old_lo if lo is None else np.asarray(lo, np.float64)
-    hi = old_hi if hi is None else np.asarray(hi, np.float64)
-    new = FieldState(None, None, box_transform(lo, hi), state.density_scale)
-    shape = shape_for(lo, hi, resolution or max(state.shape))
-    new.density = dr.zeros(mi.TensorXf, (shape[2], shape[1], shape[0], 1))  # for vertex_positions
-    p = vertex_positions(new)
-    inv = np.linalg.inv(state.to_world)
-    local = mi.Point3f(*[float(inv[r, 0]) * p.x + float(inv[r, 1]) * p.y + float(inv[r, 2]) * p.z
-                         + float(inv[r, 3]) for r in range(3)])
-    packed = grid.pack([state.density, state.color])
-    channels = 1 + state.color.shape[3]
-    values = grid.trilinear(dr.detach(packed), state.shape, grid.packet_width(channels), channels, local)
-    inside = dr.all((local >= -1e-6) & (local <= 1 + 1e-6))
-    if empty_raw is not None:
-        values[0] = dr.select(inside, values[0], empty_raw)
-    z, y, x = shape[::-1]
-    new.density = mi.TensorXf(values[0], (z, y, x, 1))
-    color = dr.zeros(mi.Float, x * y * z * (channels - 1))
-    idx = dr.arange(mi.UInt32, x * y * z)
-    for k in range(1, channels):
-        dr.scatter(color, values[k], idx * (channels - 1) + (k - 1))
-    new.color = mi.TensorXf(color, (z, y, x, channels - 1))
+def density_of(state):
+    """Raw density of every stored vertex (NumPy)."""
+    return np.array(dr.gather(mi.Float, state.data, dr.arange(mi.UInt32, state.vertices) * state.width))
+
+
+def carve(state, needed):
+    """The allocated bricks among ``needed`` (bz, by, bx bools), grown by one brick in every direction:
+    what the field needs, with a brick of margin so that no surface blends with the empty brick."""
+    return bricks.dilate_bricks(np.asarray(needed, bool) & (state.layout.table > 0)) & (state.layout.table > 0)
+
+
+def resample(state, shape=None, keep=None):
+    """The field on a lattice of ``shape`` vertices (default: the current one) over the same box, with
+    the bricks ``keep`` of the old lattice (default: all allocated) and their images on the new one
+    allocated; every new vertex holds the old field's trilinear interpolant there."""
+    old = state.layout
+    shape = tuple(shape or old.shape)
+    keep = old.table > 0 if keep is None else keep
+    new_keep = _bricks_over(keep, old, shape)
+    table = np.zeros(new_keep.shape, np.uint32)
+    table[new_keep] = np.arange(1, int(new_keep.sum()) + 1)
+    layout = bricks.Layout(shape, old.brick, table)
+    new = FieldState(layout, None, state.channels, state.to_world, state.density_scale)
+    local, real = vertex_local(new)
+    values = bricks.trilinear(dr.detach(state.data), old, state.width, state.channels, local)
+    width = state.width
+    empty = bricks.empty_values(width, state.channels)
+    data = dr.empty(mi.Float, new.vertices * width)
+    idx = dr.arange(mi.UInt32, new.vertices)
+    for c in range(width):
+        v = values[c] if c < state.channels else mi.Float(0.0)
+        dr.scatter(data, dr.select(real, v, float(empty[c])), idx * width + c)
+    new.data = data
+    dr.eval(new.data)
     return new
+
+
+def _bricks_over(keep, old, shape):
+    """Bricks of a lattice of ``shape`` vertices over the same box whose box overlaps a ``keep`` brick of
+    the ``old`` layout."""
+    b = old.brick
+    counts = bricks.counts(shape, b)
+    scale = (np.array(old.shape, np.float64) - 1) / (np.array(shape, np.float64) - 1)  # new -> old lattice
+    out = np.zeros(counts[::-1], bool)
+    z, y, x = np.nonzero(keep)
+    if len(x) == 0:
+        return out
+    lo = np.stack([x, y, z], -1) * b                      # old lattice range [lo, lo + b) of each kept brick
+    a = np.floor(lo / scale[None] / b).astype(int)        # the new bricks holding new vertices in it
+    e = np.floor((np.ceil((lo + b) / scale[None]) - 1) / b).astype(int)
+    a, e = np.clip(a, 0, np.array(counts) - 1), np.clip(e, 0, np.array(counts) - 1)
+    for k in range(len(x)):
+        out[a[k, 2]:e[k, 2] + 1, a[k, 1]:e[k, 1] + 1, a[k, 0]:e[k, 0] + 1] = True
+    return out
 
 
 def with_sh_degree(state, degree):
     """Colour coefficients truncated or zero-extended to ``degree`` (exact: see radiance_field)."""
-    c = state.color.shape[3]
-    want = 3 * (degree + 1) ** 2
-    z, y, x = state.color.shape[:3]
-    n = x * y * z
-    out = dr.zeros(mi.Float, n * want)
-    idx = dr.arange(mi.UInt32, n)
-    for k in range(min(c, want)):
-        dr.scatter(out, dr.gather(mi.Float, state.color.array, idx * c + k), idx * want + k)
-    return FieldState(state.density, mi.TensorXf(out, (z, y, x, want)), state.to_world, state.density_scale)
+    channels = 1 + 3 * (degree + 1) ** 2
+    width, old = packet_width(channels), state.width
+    idx = dr.arange(mi.UInt32, state.vertices)
+    data = dr.zeros(mi.Float, state.vertices * width)
+    for c in range(min(channels, state.channels)):
+        dr.scatter(data, dr.gather(mi.Float, state.data, idx * old + c), idx * width + c)
+    b3 = state.layout.vertices_per_brick
+    empty = bricks.empty_values(width, channels)
+    for c in range(state.channels, channels):  # new coefficients of the empty brick stay empty
+        dr.scatter(data, float(empty[c]), dr.arange(mi.UInt32, b3) * width + c)
+    return FieldState(state.layout, data, channels, state.to_world, state.density_scale)
+
+
+def neighbour_vertices(state):
+    """For every stored vertex, the stored vertex index of its 6 axis neighbours (-x, +x, -y, +y, -z,
+    +z) as UInt32 arrays; a vertex at the lattice border, of the empty brick or beyond the lattice is
+    its own neighbour there (Neumann). Neighbours in unallocated bricks are empty-brick vertices."""
+    layout = state.layout
+    coords, inside = layout.device_coords()
+    own = dr.arange(mi.UInt32, state.vertices)
+    out = []
+    for axis in range(3):
+        for step in (-1, 1):
+            c = list(coords)
+            ok = inside & ((c[axis] > 0) if step < 0 else (c[axis] + 1 < layout.shape[axis]))
+            c[axis] = dr.select(ok, c[axis] + step if step > 0 else c[axis] - 1, c[axis])
+            nb = dr.select(ok, layout.address(*c, ok), own)
+            dr.eval(nb)
+            out.append(nb)
+    return out
+
+
+def dilate_vertices(mask, neighbours, times=3):
+    """A per-vertex Bool mask grown ``times`` times to the axis neighbours (``neighbour_vertices``);
+    three times covers the 26 vertices that share a trilinear cell with a marked one."""
+    for _ in range(times):
+        grown = mi.Bool(mask)
+        for nb in neighbours:
+            grown |= dr.gather(mi.Bool, mask, nb)
+        mask = grown
+        dr.eval(mask)
+    return mask

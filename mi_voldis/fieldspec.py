@@ -2,6 +2,7 @@
 import mitsuba as mi
 import numpy as np
 
+from . import bricks
 from .activations import inverse_softplus, logit
 from .transforms import to_scalar_transform
 
@@ -21,6 +22,20 @@ def field_dict(density, color, to_world=None, density_scale=1.0):
         density = density[..., None]
     out = {"type": "radiance_field", "density": mi.TensorXf(density),
            "color": mi.TensorXf(np.asarray(color, np.float32)), "density_scale": float(density_scale)}
+    if to_world is not None:
+        out["to_world"] = to_scalar_transform(to_world)
+    return out
+
+
+def brick_field_dict(density, color, to_world=None, density_scale=1.0, brick=8, keep=None):
+    """Plugin dict of the same field stored as a brick grid (:mod:`mi_voldis.bricks`); ``keep``: the
+    bricks to allocate (default: all)."""
+    density = np.asarray(density, np.float32)
+    values = np.concatenate([density.reshape(density.shape[:3] + (1,)), np.asarray(color, np.float32)], -1)
+    layout, data = bricks.from_dense(values, brick, keep, width=values.shape[-1])
+    out = {"type": "radiance_field", "table": mi.TensorXf(layout.table.ravel().astype(np.float32)),
+           "data": mi.TensorXf(data.reshape(-1, values.shape[-1])[brick ** 3:]),
+           "vertices": mi.ScalarVector3f(*layout.shape), "brick": brick, "density_scale": float(density_scale)}
     if to_world is not None:
         out["to_world"] = to_scalar_transform(to_world)
     return out

@@ -1,23 +1,25 @@
 """Regularisers of fitting, as analytic gradients added to the optimised grids (no AD pass needed).
 
-* total variation of a grid, TV(t) = sum_v sum_axis (t[v + e_axis] - t[v])^2 / n, per channel;
-* sparsity, the L1 norm of activated density, sum_v softplus(D_v) / n.
+On a field's packed values t (n stored values: vertices x channels, see :mod:`mi_voldis.field_state`):
+
+* total variation, TV(t) = sum_v sum_axis (t[v + e_axis] - t[v])^2 / n, per channel;
+* sparsity, the L1 norm of activated density, sum_v softplus(D_v).
 """
 import drjit as dr
 import mitsuba as mi
 
-from .grid import neighbour_indices
 
-
-def tv_gradient(tensor):
-    """Gradient of TV(t) (module docstring) of a (Z, Y, X, C) tensor, every channel:
-    2 (2 t[v] - t[v + e] - t[v - e]) summed over axes (Neumann border), divided by n = X Y Z C."""
-    n = dr.width(tensor.array)
-    t = tensor.array
+def tv_gradient(values, width, neighbours):
+    """Gradient of TV (module docstring) of packed ``values`` (``width`` floats per vertex) whose vertices
+    have the axis ``neighbours`` (6 UInt32 arrays of vertex indices, Neumann border: a vertex is its own
+    neighbour there): 2 (2 t[v] - t[v + e] - t[v - e]) summed over axes, divided by n."""
+    n = dr.width(values)
+    i = dr.arange(mi.UInt32, n)
+    vertex, channel = i // width, i % width
+    centre = dr.gather(mi.Float, values, i)
     out = dr.zeros(mi.Float, n)
-    centre = dr.gather(mi.Float, t, dr.arange(mi.UInt32, n))
-    for j in neighbour_indices(tensor.shape):
-        out += 2.0 * (centre - dr.gather(mi.Float, t, j))
+    for nb in neighbours:
+        out += 2.0 * (centre - dr.gather(mi.Float, values, dr.gather(mi.UInt32, nb, vertex) * width + channel))
     return out * (1.0 / n)
 
 

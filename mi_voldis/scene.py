@@ -11,7 +11,7 @@ import os
 import mitsuba as mi
 import numpy as np
 
-from .io.scene_xml import save_field, sensor_xml
+from .io.scene_xml import save_field, save_grid, sensor_xml
 from .io.scene_xml import write_scene as write_scene_xml
 
 
@@ -27,13 +27,23 @@ def build_integrator(fields, properties):
 
 
 def write_scene(folder, fields, properties, cameras=(), name="scene.xml"):
-    """Write ``fields`` (role -> anything with raw ``density`` and ``color`` tensors, ``to_world`` and
-    ``density_scale``: a field state or a loaded field) as ``<role>_density.vol`` / ``<role>_color.vol``
-    and ``folder/name``: a scene with these fields, the integrator ``properties`` and one sensor per
-    camera (:class:`mi_voldis.cameras.Camera`). Returns the scene file's path."""
-    bodies = {role: save_field(folder, role, np.array(f.density), np.array(f.color), f.to_world, f.density_scale)
-              for role, f in fields.items()}
+    """Write ``fields`` (role -> a field state or a loaded ``radiance_field``) as ``<role>_grid.npz`` (brick
+    grids) or ``<role>_density.vol`` / ``<role>_color.vol`` (dense grids) and ``folder/name``: a scene with
+    these fields, the integrator ``properties`` and one sensor per camera
+    (:class:`mi_voldis.cameras.Camera`). Returns the scene file's path."""
+    bodies = {role: save_any_field(folder, role, f) for role, f in fields.items()}
     sensors = [sensor_xml(c.to_world, c.fov_x, c.width, c.height, 1, c.principal) for c in cameras]
     path = os.path.join(folder, name)
     write_scene_xml(path, bodies, properties, sensors)
     return path
+
+
+def save_any_field(folder, role, field):
+    """Write one field's files (brick grid or dense) and return its ``<medium>`` XML body."""
+    layout = getattr(field, "layout", None)
+    if layout is None:
+        return save_field(folder, role, np.array(field.density), np.array(field.color), field.to_world,
+                          field.density_scale)
+    packed = field.data if hasattr(field, "data") and not hasattr(field, "packed") else field.packed
+    values = np.array(packed).reshape(-1, field.width)[layout.vertices_per_brick:, :field.channels]
+    return save_grid(folder, role, layout, values, field.to_world, field.density_scale)

@@ -6,9 +6,9 @@ import mi_voldis  # noqa: F401  (selects the Mitsuba variant and registers the p
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TINY_FIT = ["steps_full=60", "steps_bg=12", "lr_warmup=2", "lr_density=0.3", "resolution_schedule=[[0,12],[20,20]]",
-            "tighten_at_step=20",
+            "occupancy_at_step=20",
             "batch_rays=1024", "sh_degree=\"auto\"", "sh_trial_steps=4", "checkpoint_every=10", "eval_every=20",
-            "occupancy_resolution=24", "preview_views=1"]
+            "preview_views=1"]
 
 
 @pytest.fixture(scope="session")

@@ -16,7 +16,7 @@ from mi_voldis.render.views import render_camera
 
 
 def test_run_writes_everything(tiny_run):
-    for name in ("full_density.vol", "full_color.vol", "bg_density.vol", "bg_color.vol", "scene.xml", "config.json",
+    for name in ("full_grid.npz", "bg_grid.npz", "scene.xml", "config.json",
                  "metrics.json", "log.json", "training.png", "checkpoints/last.npz"):
         assert os.path.isfile(os.path.join(tiny_run, name)), name
     assert any(f.endswith("_fg.png") for f in os.listdir(os.path.join(tiny_run, "previews")))
@@ -28,12 +28,12 @@ def test_run_writes_everything(tiny_run):
     assert m["seconds"]["phase_full"] > 0 and m["seconds"]["phase_bg"] > 0 and m["msps_mean"] > 0
     assert 0 < m["evaluated_samples_per_ray"] <= m["max_samples_per_ray"] and m["step_size"] > 0
     assert m["peak_rss_mib"] > 100  # Python + Mitsuba + the fields: the process's own peak, recorded by itself
-    # the box was tightened inside the dataset's box
+    # a bounded dataset (an aabb) keeps its world box; carving left only some bricks
     dataset = json.load(open(os.path.join(tiny_run, "config.json")))["dataset"]
     assert dataset["format"] == "transforms" and dataset["holdout"] == 8
     ds_box = json.load(open(os.path.join(dataset["path"], "transforms.json")))["aabb"]
-    assert np.all(np.array(m["box"]["lo"]) >= np.array(ds_box[0]) - 1e-9)
-    assert np.all(np.array(m["box"]["hi"]) <= np.array(ds_box[1]) + 1e-9)
+    assert m["space"] == "world" and np.allclose([m["box"]["lo"], m["box"]["hi"]], ds_box)
+    assert 0 < m["bricks"]["full"]["allocated"] <= m["bricks"]["full"]["of"]
 
 
 def test_scene_xml_renders_the_fitted_fields(tiny_run):
@@ -146,8 +146,10 @@ def test_render_script_from_dataset_cameras(tiny_run, tmp_path):
     ("steps_bg=-5", "steps_bg must be a number >= 0, got -5"),
     ("hull_min_views=2", "hull_min_views must be a number > 0 and <= 1, got 2"),
     ("object_alpha=-1", "object_alpha must be"),
-    ("occupancy_resolution=-1", "occupancy_resolution must be a number >= 0"),
-    ("tighten_margin=-1", "tighten_margin must be a number >= 0"),
+    ("occupancy_voxels=0", "occupancy_voxels must be a number >= 1"),
+    ("carve_weight=2", "carve_weight must be a number > 0 and <= 1, got 2"),
+    ("space=\"nowhere\"", 'space must be one of "auto", "contract", "world", "ndc"'),
+    ("distortion=-0.1", "distortion must be a number >= 0"),
     ("sh_degree=2", 'sh_degree must be one of "auto", 0, 1, got 2'),
     ("bg_strategy=\"magic\"", 'bg_strategy must be one of "refit", "scratch"'),
 ])

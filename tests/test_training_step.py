@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 from helpers import field_dict
 
-from mi_voldis import grid
+from mi_voldis import bricks, field_state, grid
+from mi_voldis.fieldspec import brick_field_dict
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.problem import FieldFit
 from mi_voldis.optim.adam import Adam
 from mi_voldis.optim.parameters import PackedParameters
 from mi_voldis.raybank import tile_pixels
-from mi_voldis.regularizers import tv_gradient
 
 
 def random_field(shape=(3, 4, 5), channels=3, seed=0):
@@ -67,23 +67,42 @@ def test_adam_zero_rate_slots_stay_put():
 
 
 def test_packed_regularisers_match_the_tensor_formulas():
-    """Sparsity on density, TV on every tensor with its own weight, the hull mask, padding untouched."""
-    field, d, c = random_field(channels=12)
+    """On a brick grid with every brick allocated: sparsity on density, TV on every channel group with its
+    own weight (the dense formula on each tensor), the hull mask, padding and the empty brick untouched."""
+    rng = np.random.default_rng(3)
+    d, c = rng.normal(0, 1, (5, 6, 7, 1)).astype(np.float32), rng.normal(0, 1, (5, 6, 7, 12)).astype(np.float32)
+    field = mi.load_dict(brick_field_dict(d, c, brick=4))
+    layout, b3 = field.layout, field.layout.vertices_per_brick
     cfg = FitConfig(tv_every=2, tv_density=1e-2, tv_color=3e-3, sparsity=1e-1)
     params = PackedParameters({"full": field})
-    hull = mi.Float((np.arange(d.size) % 3 != 0).astype(np.float32))
-    fake = SimpleNamespace(inputs=SimpleNamespace(cfg=cfg), roles=("full",), params=params, hull=hull,
-                           integrator=SimpleNamespace(fields={"full": field}))
+    coords, inside = layout.vertex_coords()
+    keep = (np.arange(field.layout.slots * b3) % 3 != 0).astype(np.float32)
+    state = field_state.FieldState(layout, field.packed, 13, np.eye(4))
+    fake = SimpleNamespace(inputs=SimpleNamespace(cfg=cfg), roles=("full",), params=params, hull=mi.Float(keep),
+                           integrator=SimpleNamespace(fields={"full": field}), neighbours={},
+                           state=SimpleNamespace(fields={"full": state}))
     grads = FieldFit.extra_gradients(fake, 4, {"full.packed": dr.zeros(mi.Float, dr.width(field.packed))})
-    got_d, got_c = grid.unpack(grads["full.packed"], [1, 12], d.shape[:3])
-    td, tc = mi.TensorXf(d), mi.TensorXf(c)
-    want_d = (cfg.sparsity / d.size) / (1 + np.exp(-d.ravel())) + 2 * cfg.tv_density * np.array(tv_gradient(td))
-    want_c = 2 * cfg.tv_color * np.array(tv_gradient(tc))
-    mask = np.array(hull)
-    np.testing.assert_allclose(np.array(got_d).ravel(), want_d * mask, rtol=1e-5, atol=1e-9)
-    np.testing.assert_allclose(np.array(got_c).ravel(), want_c * np.repeat(mask, 12), rtol=1e-5, atol=1e-9)
-    padding = np.array(grads["full.packed"]).reshape(-1, 16)[:, 13:]
-    assert not padding.any()
+    got = bricks.to_dense(np.array(grads["full.packed"]), layout, 16)
+    stored = layout.slots * b3  # the means are over stored vertices (the empty brick and padding too)
+    td, tc = d[..., 0], c
+
+    def dense_tv(t):  # gradient of sum_v sum_axis (t[v+e] - t[v])^2, Neumann border, per channel
+        g = np.zeros_like(t)
+        for axis in range(3):
+            diff = np.diff(t, axis=axis)
+            pad = [(0, 0)] * t.ndim
+            pad[axis] = (1, 0)
+            g += 2 * np.pad(diff, pad)  # d/dt[v] of (t[v] - t[v-1])^2
+            pad[axis] = (0, 1)
+            g -= 2 * np.pad(diff, pad)  # d/dt[v] of (t[v+1] - t[v])^2
+        return g
+    want_d = (cfg.sparsity / stored) / (1 + np.exp(-td)) + 2 * cfg.tv_density * 16 * dense_tv(td) / (stored * 16)
+    want_c = 2 * cfg.tv_color * 16 / 12 * dense_tv(tc) / (stored * 16)
+    mask = bricks.to_dense(np.repeat(keep, 16), layout, 16)[..., 0]
+    np.testing.assert_allclose(got[..., 0], want_d * mask, rtol=1e-4, atol=1e-8)
+    np.testing.assert_allclose(got[..., 1:13], want_c * mask[..., None], rtol=1e-4, atol=1e-8)
+    packed = np.array(grads["full.packed"]).reshape(-1, 16)
+    assert not packed[:, 13:].any() and not packed[:b3].any()  # padding and the empty brick
 
 
 def test_tiles_cover_their_anchor_inside_the_image():

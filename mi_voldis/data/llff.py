@@ -13,10 +13,8 @@ import numpy as np
 
 from .conventions import camera_from_intrinsics, llff_to_mitsuba, mitsuba_to_llff, rigid_error
 from .images import check_masks, check_sizes, list_images, read_image, read_mask
-from .scene_box import ndc_box
+from .scene_box import NEAR_FRACTION, ndc_box
 from .types import Dataset, DatasetError
-
-NEAR_FRACTION = 0.75  # NeRF: NDC near plane at 0.75 x the smallest bound
 
 
 def image_folder(root, factor=None):

@@ -4,6 +4,8 @@ import numpy as np
 from ..cameras import pixel_rays
 from ..space import SceneBox, SceneSpace
 
+NEAR_FRACTION = 0.75  # forward-facing captures: rays start at 0.75 x the nearest depth bound (NeRF's NDC near plane)
+
 
 def look_at_point(cameras):
     """Point closest (least squares) to every camera's optical axis."""
@@ -74,3 +76,47 @@ def ndc_box(cameras, near, far, z_max=0.999):
     lo[:2], hi[:2] = lo[:2] - pad[:2], hi[:2] + pad[:2]
     lo[2], hi[2] = -1.0, z_max
     return SceneBox("ndc", lo, hi, ref, near, scale)
+
+
+def contracted_box(cameras, forward_facing, near=None, shell=1.0):
+    """Contracted space of a capture (:mod:`mi_voldis.space`): the inner cube holds every camera.
+
+    360-degree captures: centred on the cameras' common look-at point, axis-aligned, half-size 1.1 x
+    the farthest camera's distance from it, so that the object and the cameras' ring stay linear and
+    the far background fills the shell. Forward-facing captures: centred on the cameras, in the frame
+    of their average pose, half-size the larger of 1.1 x the rig's radius and half the nearest depth
+    ``near``: the scene lies in the shell, uniform in disparity as in NDC, and views from off the rig
+    still see it."""
+    positions = np.array([np.asarray(c.to_world)[:3, 3] for c in cameras])
+    if forward_facing:
+        frame = average_pose(cameras)
+        centre = positions.mean(axis=0)
+        radius = 1.1 * np.max(np.linalg.norm(positions - centre, axis=1))
+        if near is not None:
+            radius = max(radius, 0.5 * float(near))
+    else:
+        frame = np.eye(4)
+        centre = look_at_point(cameras)
+        radius = 1.1 * np.max(np.linalg.norm(positions - centre, axis=1))
+    to_world = frame.copy()
+    to_world[:3, :3] = frame[:3, :3] * radius
+    to_world[:3, 3] = centre
+    e = 1.0 + shell
+    start = NEAR_FRACTION * float(near) if forward_facing and near is not None else 0.0
+    return SceneBox("contract", np.full(3, -e), np.full(3, e), to_world=to_world, shell=shell, near=start)
+
+
+def fitting_box(dataset, space="auto", shell=1.0):
+    """The scene box a fit uses: the dataset's own box for 'world' or 'ndc' (a bounded scene states its
+    box; forward-facing loaders give NDC), a contracted space for 'contract'; 'auto' keeps a stated world
+    box (``meta['aabb']``) and contracts everything else."""
+    box = dataset.box
+    if space == "auto":
+        space = "world" if box.kind == "world" and dataset.meta.get("aabb") else "contract"
+    if space == box.kind:
+        return box
+    if space == "contract":
+        near = float(np.min(dataset.near_far)) if dataset.near_far is not None else None
+        return contracted_box(dataset.cameras, box.kind == "ndc" or is_forward_facing(dataset.cameras), near, shell)
+    raise ValueError(f"{dataset.root}: a '{space}' scene space needs a dataset that gives one (it gives "
+                     f"'{box.kind}')")

@@ -145,6 +145,10 @@ def load_transforms(root, holdout=8):
     if "moved_transform" in top:
         ds.moved_transform = np.asarray(top["moved_transform"], np.float64)
     ds.box = _box(top, cameras, metas[0][1])
+    if "aabb" in top:
+        ds.meta["aabb"] = True  # a bounded scene: fitting keeps its world box
+    if ds.box.kind == "ndc":
+        ds.near_far = np.array([[float(top["near"]), float(top["far"])]])
     return ds
 
 

@@ -4,25 +4,24 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..field_state import EMPTY_COLOR, FieldState, density_raw_for_alpha, vertex_positions
-from ..grid import dilate_cells, neighbour_indices
+from ..bricks import EMPTY_COLOR
+from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, neighbour_vertices, vertex_positions
 from ..metrics import dilate
-from .fields import cell_size
 from .hull import visual_hull
 
 
-def hull_region(inputs, field):
-    """Per-vertex hull indicator (Float, 1 inside) of ``field``'s grid and the hull vertices'
-    scene-space positions; the hull is grown by one voxel."""
+def hull_region(inputs, field, neighbours):
+    """Per stored vertex of ``field``, 1 inside the object's visual hull (Float), and the hull vertices'
+    scene-space positions; the hull is grown by two vertices."""
     cfg, ds = inputs.cfg, inputs.ds
-    pts_scene = np.array(vertex_positions(field)).T
-    pts_world = inputs.space.to_world_np(pts_scene)
+    pts_scene, real = vertex_positions(field)
+    inside = np.zeros(len(pts_scene), bool)
+    pts_world = inputs.space.to_world_np(pts_scene[real])
     diag = np.hypot(*ds.size)
-    inside = visual_hull(pts_world, [ds.cameras[v] for v in ds.train], ds.masks[ds.train],
-                         int(np.ceil(cfg.hull_dilation * diag)), cfg.hull_min_views)
-    sx, sy, sz = field.shape
-    grown = dilate_cells(inside.reshape(sz, sy, sx))
-    return mi.Float(grown.ravel().astype(np.float32)), pts_scene[grown.ravel()]
+    inside[real] = visual_hull(pts_world, [ds.cameras[v] for v in ds.train], ds.masks[ds.train],
+                               int(np.ceil(cfg.hull_dilation * diag)), cfg.hull_min_views)
+    grown = dilate_vertices(mi.Bool(inside), neighbours, 2) & mi.Bool(real)
+    return dr.select(grown, 1.0, 0.0), pts_scene[np.array(grown)]
 
 
 def start_background(inputs, state):
@@ -32,24 +31,30 @@ def start_background(inputs, state):
     ``object_alpha``), which are emptied so that w_fg = w_full - w_bg keeps the whole object; then
     L_bg refits what some view sees."""
     full = state.fields["full"]
-    hull, points, obj = background_regions(inputs, state)
-    voxel = cell_size(state.lo, state.hi, max(full.shape))
-    empty = density_raw_for_alpha(inputs.cfg.density_init_alpha, voxel * inputs.cfg.step_voxels, full.density_scale)
-    density = harmonic_fill(full.density, hull)
-    density = mi.TensorXf(dr.select(obj, empty, density.array), full.density.shape)
-    color = harmonic_fill(full.color, hull)  # black in the object itself: there c_fg = c_full
-    color = mi.TensorXf(dr.select(dr.repeat(obj, full.color.shape[3]), EMPTY_COLOR, color.array), full.color.shape)
-    state.fields["bg"] = FieldState(density, color, full.to_world.copy(), full.density_scale)
+    neighbours = neighbour_vertices(full)
+    hull, points, obj = background_regions(inputs, state, neighbours)
+    empty = density_raw_for_alpha(inputs.cfg.density_init_alpha, voxel_of(full) * inputs.cfg.step_voxels,
+                                  full.density_scale)
+    values = harmonic_fill(full.data, full.width, hull, neighbours)
+    channel = dr.arange(mi.UInt32, dr.width(values)) % full.width
+    obj = dr.repeat(obj, full.width)  # the object itself: empty, and black so that there c_fg = c_full
+    values = dr.select(obj & (channel == 0), empty, dr.select(obj & (channel > 0), EMPTY_COLOR, values))
+    state.fields["bg"] = FieldState(full.layout, values, full.channels, full.to_world.copy(), full.density_scale)
     state.hull_points = points
 
 
-def background_regions(inputs, state):
-    """The visual hull (Float per vertex), its vertices' positions, and the object's own voxels
+def voxel_of(field):
+    return float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
+
+
+def background_regions(inputs, state, neighbours=None):
+    """The visual hull (Float per stored vertex), its vertices' positions, and the object's own voxels
     (Bool: hull vertices whose full-field opacity per voxel exceeds ``object_alpha``)."""
     full = state.fields["full"]
-    hull, points = hull_region(inputs, full)
-    voxel = cell_size(state.lo, state.hi, max(full.shape))
-    dense = full.density.array > density_raw_for_alpha(inputs.cfg.object_alpha, voxel, full.density_scale)
+    neighbours = neighbours or neighbour_vertices(full)
+    hull, points = hull_region(inputs, full, neighbours)
+    raw = dr.gather(mi.Float, full.data, dr.arange(mi.UInt32, full.vertices) * full.width)
+    dense = raw > density_raw_for_alpha(inputs.cfg.object_alpha, voxel_of(full), full.density_scale)
     return hull, points, (hull > 0) & dense
 
 
@@ -63,30 +68,39 @@ def background_ray_pool(ds, bank, dilation):
 def clear_empty_background_color(inputs, state):
     """Set background colour to black at vertices that no visible background sample reads: those
     whose voxel opacity is below ``empty_color_alpha`` and whose neighbours (which share trilinear
-    cells with them) are all below it too."""
+    cells with them) are all below it too. Returns the fraction of stored vertices cleared."""
     bg = state.fields["bg"]
-    step = cell_size(state.lo, state.hi, max(bg.shape))
-    threshold = density_raw_for_alpha(inputs.cfg.empty_color_alpha, step, bg.density_scale)
-    occupied = np.array(bg.density)[..., 0] >= threshold
-    empty = mi.Bool(~dilate_cells(occupied).ravel())
-    c = bg.color.shape[3]
-    color = dr.select(dr.repeat(empty, c), EMPTY_COLOR, bg.color.array)
-    state.fields["bg"] = FieldState(bg.density, mi.TensorXf(color, bg.color.shape), bg.to_world, bg.density_scale)
+    threshold = density_raw_for_alpha(inputs.cfg.empty_color_alpha, voxel_of(bg), bg.density_scale)
+    raw = dr.gather(mi.Float, bg.data, dr.arange(mi.UInt32, bg.vertices) * bg.width)
+    empty = ~dilate_vertices(raw >= threshold, neighbour_vertices(bg))
+    channel = dr.arange(mi.UInt32, dr.width(bg.data)) % bg.width
+    values = dr.select(dr.repeat(empty, bg.width) & (channel > 0) & (channel < bg.channels), EMPTY_COLOR, bg.data)
+    state.fields["bg"] = FieldState(bg.layout, values, bg.channels, bg.to_world, bg.density_scale)
     return float(dr.mean(mi.Float(empty))[0])
 
 
-def harmonic_fill(tensor, region, iterations=300):
-    """Values of ``tensor`` inside ``region`` (Float per vertex, 1 = fill) replaced by the harmonic
-    extension of the values around it (Jacobi iterations of the 6-neighbour Laplace equation, every
-    channel), a smooth volumetric inpainting: surfaces crossing the region continue through it."""
-    c = tensor.shape[3]
-    v = dr.arange(mi.UInt32, dr.width(tensor.array)) // c
-    fill = dr.gather(mi.Float, region, v) > 0
-    values = dr.select(fill, 0.0, tensor.array)
-    neighbours = neighbour_indices(tensor.shape)
-    dr.eval(neighbours, values)
+def harmonic_fill(values, width, region, neighbours, iterations=300):
+    """Packed ``values`` inside ``region`` (Float per stored vertex, 1 = fill) replaced by the harmonic
+    extension of the values around them (Jacobi iterations of the 6-neighbour Laplace equation, every
+    channel), a smooth volumetric inpainting: surfaces crossing the region continue through it. Only
+    the region's values are iterated (compactly); the rest stay as they are."""
+    n = dr.width(values)
+    i = dr.arange(mi.UInt32, n)
+    fill = dr.compress(dr.gather(mi.Float, region, i // width) > 0)  # packed indices to fill
+    m = dr.width(fill)
+    compact = dr.full(mi.UInt32, m, n)  # packed index -> its place in the fill set (m: not in it)
+    dr.scatter(compact, dr.arange(mi.UInt32, m), fill)
+    vertex, channel = fill // width, fill % width
+    dirs = []
+    for nb in neighbours:
+        j = dr.gather(mi.UInt32, nb, vertex) * width + channel
+        k = dr.gather(mi.UInt32, compact, j)
+        dirs.append((k < m, k, dr.gather(mi.Float, values, j)))  # (free?, place, fixed value)
+    inner = dr.zeros(mi.Float, m)
+    dr.eval(dirs, inner)
     for _ in range(iterations):
-        mean = sum(dr.gather(mi.Float, values, j) for j in neighbours) * (1.0 / 6.0)
-        values = dr.select(fill, mean, values)
-        dr.eval(values)
-    return mi.TensorXf(values, tensor.shape)
+        inner = sum(dr.select(free, dr.gather(mi.Float, inner, k, free), fixed) for free, k, fixed in dirs) / 6.0
+        dr.eval(inner)
+    out = dr.copy(values)  # the caller's values stay unchanged
+    dr.scatter(out, inner, fill)
+    return out

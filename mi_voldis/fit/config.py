@@ -25,6 +25,14 @@ def _schedule_error(schedule):
 
 @dataclass
 class FitConfig(Settings):
+    # ---- scene space
+    space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
+                                 "'world' (the dataset's box), 'ndc' (forward-facing captures) or 'auto' "
+                                 "(world where the dataset states a box, else contract)",
+                         choices=("auto", "contract", "world", "ndc"))
+    contract_shell: float = setting(1.0, "contracted space: the outer shell's share b of the scene cube "
+                                         "[-(1 + b), 1 + b]^3 (1: Mip-NeRF 360)", above=0)
+
     # ---- schedule: coarse to fine, as data
     resolution_schedule: list = setting([[0, 48], [250, 96], [500, 128]],
                                         "[[step, vertices along the box's longest side], ...], coarse to fine",
@@ -60,16 +68,22 @@ class FitConfig(Settings):
     tv_every: int = setting(4, "apply the TV gradient (scaled by this) every k steps: it costs a pass over "
                                "the whole grid", low=1)
     sparsity: float = setting(1e-5, "L1 on activated density: empty space stays empty", low=0)
+    distortion: float = setting(0.01, "weight of Mip-NeRF 360's distortion loss, ray positions in units of the "
+                                      "scene box (pulls each ray's weights into one compact peak: no floaters)",
+                                low=0)
 
     # ---- modelling only what the scene needs
-    tighten_at_step: int = setting(250, "shrink the box to the space rays end in at this step (0: never)", low=0)
-    tighten_margin: float = setting(0.04, "margin added around the occupied box, fraction of its size", low=0)
-    occupancy_resolution: int = setting(96, "occupancy grid cells along the longest side (0: no skipping)",
-                                        low=0)
+    brick: int = setting(8, "vertices along a brick's edge (sparse storage unit)", choices=(4, 8, 16))
+    carve_weight: float = setting(1e-2, "at each resolution step bricks are kept where some training ray gives a "
+                                        "sample this much weight (where rays end; grown by a brick)", above=0,
+                                  high=1)
+    carve_rays: int = setting(1 << 20, "training rays traced to find where rays end (all pixels when fewer)", low=1)
+    occupancy_at_step: int = setting(250, "empty-space skipping starts at this step (0: never)", low=0)
+    occupancy_voxels: int = setting(4, "occupancy cells are this many voxels of the current grid across", low=1)
     occupancy_alpha: float = setting(1e-3, "a cell is empty when no voxel in it reaches this opacity: half "
                                            "the initial one, so only space the data carved out is skipped",
                                      above=0, high=1)
-    occupancy_every: int = setting(100, "steps between occupancy updates (after tightening)", low=1)
+    occupancy_every: int = setting(100, "steps between occupancy updates", low=1)
     empty_color_alpha: float = setting(1e-3, "background colour is reset to black where its voxel opacity is "
                                              "lower", low=0, high=1)
 

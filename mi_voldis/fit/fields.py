@@ -1,27 +1,31 @@
-"""The fields of a fit: what it reads (:class:`FitInputs`), how its fields start, shrink to the space
-rays end in, and the integrator that renders them. Free functions of the inputs and a
-:class:`~mi_voldis.fit.state.FitState`."""
+"""The fields of a fit: what it reads (:class:`FitInputs`), how its fields start, are carved and refined
+from one resolution to the next, and the integrator that renders them. Free functions of the inputs
+and a :class:`~mi_voldis.fit.state.FitState`."""
 from dataclasses import dataclass
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..data.scene_box import fitting_box
 from ..data.types import Dataset
-from ..field_state import FieldState, density_raw_for_alpha, init_state, resample, voxel_size
+from ..field_state import carve, density_raw_for_alpha, new_field, resample, shape_for, voxel_size
+from ..fieldspec import constant_field
 from ..raybank import RayBank
-from ..render.rays import render_rays
+from ..render import march
 from ..scene import build_integrator, integrator_properties
-from ..space import SceneSpace
+from ..space import SceneBox, SceneSpace
+from ..transforms import apply_point
 from .config import FitConfig
 
 
 @dataclass(frozen=True)
 class FitInputs:
-    """What a fit reads and never changes: the dataset, the settings, the scene space, the training
-    rays, the checkpoint file and whether to show progress."""
+    """What a fit reads and never changes: the dataset, the settings, the scene box and space the fields
+    live in, the training rays, the checkpoint file and whether to show progress."""
     ds: Dataset
     cfg: FitConfig
+    box: SceneBox
     space: SceneSpace
     bank: RayBank
     checkpoint: str
@@ -29,7 +33,8 @@ class FitInputs:
 
     @classmethod
     def of(cls, dataset, cfg, checkpoint, progress=True):
-        return cls(dataset, cfg, SceneSpace.from_box(dataset.box), RayBank(dataset, dataset.train), checkpoint,
+        box = fitting_box(dataset, cfg.space, cfg.contract_shell)
+        return cls(dataset, cfg, box, SceneSpace.from_box(box), RayBank(dataset, dataset.train), checkpoint,
                    progress)
 
 
@@ -47,7 +52,48 @@ def init_fields(inputs, state, roles, sh_degree):
     scale = 1.0 / cell_size(state.lo, state.hi, cfg.resolution_schedule[-1][1])
     raw = density_raw_for_alpha(cfg.density_init_alpha, step, scale)
     for r in roles:
-        state.fields[r] = init_state(state.lo, state.hi, res, sh_degree, raw, scale)
+        state.fields[r] = new_field(state.lo, state.hi, res, sh_degree, raw, scale, cfg.brick)
+
+
+def refine(inputs, state, integrator, roles, resolution):
+    """Carve the fields of ``roles`` to the bricks where training rays end (some sample of some ray gets
+    weight ``carve_weight``; grown by a brick) and resample them onto a lattice of ``resolution``
+    vertices along the box's longest side."""
+    for r in roles:
+        f = state.fields[r]
+        weights = ray_weights(inputs, integrator, r)
+        needed = weights > inputs.cfg.carve_weight
+        if not needed.any():  # a field still nearly transparent everywhere: keep its strongest bricks
+            needed = weights >= 0.5 * weights.max() if weights.max() > 0 else np.ones(weights.shape, bool)
+        state.fields[r] = resample(f, shape_for(state.lo, state.hi, resolution), carve(f, needed))
+
+
+def ray_weights(inputs, integrator, role):
+    """Per brick of the field of ``role`` (bz, by, bx NumPy): the largest weight that any traced training
+    ray (``carve_rays`` of them, at pixel centres) gives a sample there."""
+    field = integrator.fields[role]
+    layout, to_local = field.layout, field.world_to_local
+    bx, by, bz = layout.counts
+    best = dr.zeros(mi.Float, bx * by * bz)
+    plan = integrator.plan((role,))
+    chain = plan.sources.full if role == "full" else plan.sources.bg
+    res = mi.Vector3f(*[float(s - 1) for s in layout.shape])
+
+    def probe(p, w, active):
+        v = mi.Vector3u(dr.clip(apply_point(to_local, p), 0.0, 1.0) * res + 0.5) // layout.brick
+        dr.scatter_reduce(dr.ReduceOp.Max, best, w[chain], (v.z * by + v.y) * bx + v.x, active)
+
+    bank = inputs.bank
+    count = min(inputs.cfg.carve_rays, bank.pixels)
+    pixels = np.random.default_rng([inputs.cfg.seed, 98]).choice(bank.pixels, count, replace=False)
+    with dr.suspend_grad():
+        for s in range(0, count, 1 << 17):
+            idx = np.sort(pixels[s:s + (1 << 17)]).astype(np.uint32)
+            o, d, _, _ = bank.rays(idx, np.full((len(idx), 2), 0.5, np.float32))
+            rays = march.prepare_rays(plan, o, d)
+            march.forward(plan, rays, dr.full(mi.Float, 0.5, len(idx)), probe=probe)
+            dr.eval(best)
+    return np.array(best).reshape(bz, by, bx)
 
 
 def occupancy_sigma(cfg, state):
@@ -55,48 +101,26 @@ def occupancy_sigma(cfg, state):
     return -np.log1p(-cfg.occupancy_alpha) / voxel_size(state.fields["full"])
 
 
+def occupancy_resolution(cfg, state):
+    """Occupancy cells along the box's longest side: cells ``occupancy_voxels`` voxels across."""
+    return max(1, int(np.ceil((max(state.fields["full"].shape) - 1) / cfg.occupancy_voxels)))
+
+
 def sample_step(cfg, state):
     """Sample spacing along rays (scene units): ``step_voxels`` of the current grid's voxels."""
     return cfg.step_voxels * voxel_size(state.fields["full"])
+
+
+def scene_properties(inputs, state, **options):
+    """Integrator properties of the fitted scene (space, samples, step, near) plus ``options``."""
+    return integrator_properties(inputs.space, samples=inputs.cfg.max_samples, near=float(inputs.box.near),
+                                 step_size=float(sample_step(inputs.cfg, state)), **options)
 
 
 def fit_integrator(inputs, state):
     """The ``voldis`` integrator over the current fields (no occupancy: fitting updates it itself)."""
     full = state.fields["full"]
     bg = state.fields.get("bg")
-    if bg is None:  # the full phase of "refit": an empty stand-in background over the same box
-        bg = FieldState(dr.full(mi.TensorXf, -30.0, (2, 2, 2, 1)), dr.zeros(mi.TensorXf, (2, 2, 2, 3)), full.to_world)
-    props = integrator_properties(inputs.space, samples=inputs.cfg.max_samples,
-                                  step_size=sample_step(inputs.cfg, state))
-    return build_integrator({"full": full.plugin(), "bg": bg.plugin()}, props)
-
-
-def tighten(inputs, state, integrator):
-    """Shrink the box to the space the training rays end in; skip empty space from now on."""
-    box = seen_box(inputs, state, integrator)
-    if box is not None:
-        state.lo, state.hi = box
-        empty = density_raw_for_alpha(1e-6, 1.0, state.fields["full"].density_scale)
-        for r in list(state.fields):
-            state.fields[r] = resample(state.fields[r], max(state.fields[r].shape), state.lo, state.hi, empty)
-    state.occupancy_on = inputs.cfg.occupancy_resolution > 0
-
-
-def seen_box(inputs, state, integrator, rays=1 << 16):
-    """Scene-space bounds of where random training rays end (alpha > 0.5, at their expected
-    depth), grown by ``tighten_margin`` of the size and two voxels; None if no ray ends."""
-    cfg, bank = inputs.cfg, inputs.bank
-    rng = np.random.default_rng([cfg.seed, 99])
-    idx = rng.integers(0, bank.pixels, rays).astype(np.uint32)
-    o, d, _, _ = bank.rays(idx, np.full((rays, 2), 0.5, np.float32))
-    with dr.suspend_grad():
-        out = render_rays(integrator, o, d, dr.full(mi.Float, 0.5, rays), ("full",))
-    alpha, depth = np.array(out["full"][1]), np.array(out["full"][2])
-    keep = alpha > 0.5
-    if not keep.any():
-        return None
-    pts = np.array(o).T[keep] + depth[keep, None] * np.array(d).T[keep]
-    pts = inputs.space.from_world_np(pts)
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    pad = cfg.tighten_margin * (hi - lo) + 2 * voxel_size(state.fields["full"])
-    return np.maximum(lo - pad, state.lo), np.minimum(hi + pad, state.hi)
+    # the full phase of "refit": an empty stand-in background over the same box
+    bg = bg.plugin() if bg is not None else constant_field(1e-12, (0.0, 0.0, 0.0), full.to_world)
+    return build_integrator({"full": full.plugin(), "bg": bg}, scene_properties(inputs, state))

@@ -5,12 +5,12 @@ import mitsuba as mi
 import numpy as np
 
 from ..device import from_numpy
-from ..field_state import resample
+from ..field_state import neighbour_vertices
 from ..losses import background_loss, full_loss
 from ..optim.parameters import PackedParameters
 from ..regularizers import sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
-from .fields import fit_integrator, occupancy_sigma, tighten
+from .fields import fit_integrator, occupancy_resolution, occupancy_sigma, refine
 
 
 def backdrop(ds, rng, n):
@@ -29,8 +29,8 @@ def psnr_of(mse):
 
 class FieldFit:
     """One fitting phase: the fields of ``roles`` fitted through ``layers`` to rays of ``bank``
-    (``pool``: flat pixel indices to draw from), their updates masked to ``hull`` (a Float per vertex)
-    when given; ``schedule``: follow the resolution schedule and box tightening."""
+    (``pool``: flat pixel indices to draw from), their updates masked to ``hull`` (a Float per stored
+    vertex) when given; ``schedule``: follow the resolution schedule and start empty-space skipping."""
 
     def __init__(self, inputs, state, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
                  rates=None):
@@ -39,6 +39,7 @@ class FieldFit:
         self.adam = state.adam if adam is None else adam
         cfg = inputs.cfg
         self.rates = (cfg.lr_density, cfg.lr_color) if rates is None else rates  # (density, colour)
+        self.neighbours = {}
         self.rebuild()
 
     # -- plumbing
@@ -48,35 +49,32 @@ class FieldFit:
         self.keys = list(self.params)
         for r in self.roles:
             self.adam.lrs[f"{r}.packed"] = self.params.per_slot(r, *self.rates)
+        self.neighbours = {}  # per role, made when the TV first needs them
         if self.state.occupancy_on:
             self.update_occupancy()
 
     def update_occupancy(self):
         extra = self.state.hull_points if self.hull is not None else None
-        self.integrator.update_occupancy(self.inputs.cfg.occupancy_resolution,
+        self.integrator.update_occupancy(occupancy_resolution(self.inputs.cfg, self.state),
                                          occupancy_sigma(self.inputs.cfg, self.state), extra)
 
     def sync_states(self):
         """Copy the optimised values back into the fit state's fields."""
         for r in self.roles:
-            s, f = self.state.fields[r], self.integrator.fields[r]
-            s.density, s.color = f.density, f.color
+            self.state.fields[r].data = self.integrator.fields[r].packed
 
     # -- schedule
     def before_step(self, step):
         cfg, state = self.inputs.cfg, self.state
-        tighten_now = self.schedule and cfg.tighten_at_step and step == cfg.tighten_at_step and not state.occupancy_on
         upsample = self.schedule and any(step == start for start, _ in cfg.resolution_schedule[1:])
-        if tighten_now or upsample:
-            self.sync_states()  # once: the states are replaced below
-            if tighten_now:
-                tighten(self.inputs, state, self.integrator)
-            if upsample:
-                for r in self.roles:
-                    state.fields[r] = resample(state.fields[r], cfg.resolution_at(step))
+        if upsample:
+            self.sync_states()
+            refine(self.inputs, state, self.integrator, self.roles, cfg.resolution_at(step))
             self.adam.reset()
             self.rebuild()
-        elif state.occupancy_on and step % cfg.occupancy_every == 0 and step > 0:
+        start = self.schedule and cfg.occupancy_at_step and step >= cfg.occupancy_at_step and not state.occupancy_on
+        if start or (state.occupancy_on and step % cfg.occupancy_every == 0 and step > 0 and not upsample):
+            state.occupancy_on = True
             self.sync_states()
             self.update_occupancy()
 
@@ -86,10 +84,15 @@ class FieldFit:
         rng = np.random.default_rng([cfg.seed, self.phase, step])
         n = cfg.batch_rays
         o, d, color, mask = self.bank.batch(rng, n, self.pool, cfg.batch_tile)
-        out = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(n, np.float32)), self.layers)
+        distortion = tuple(layer for layer in self.layers if layer in ("full", "bg")) if cfg.distortion else ()
+        out = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(n, np.float32)), self.layers,
+                          distortion=distortion)
         behind = backdrop(self.inputs.ds, rng, n)
         loss = mi.Float(0.0)
         stats = {"samples": float(dr.sum(out["evaluated"])[0])}
+        extent = float(np.max(self.state.hi - self.state.lo))  # ray positions in units of the scene box
+        for layer in distortion:
+            loss += (cfg.distortion / extent) * dr.mean(out["distortion"][layer])
         if "full" in self.layers:
             err = full_loss(out["full"][0] + (1.0 - out["full"][1]) * behind, color)
             loss += err
@@ -102,7 +105,8 @@ class FieldFit:
 
     def extra_gradients(self, step, grads):
         """Regularisers on the packed grids (channel 0 density, then colour; padding untouched):
-        sparsity on activated density, total variation every ``tv_every`` steps, and the hull mask."""
+        sparsity on activated density, total variation every ``tv_every`` steps, and the hull mask; the
+        empty brick gets none."""
         cfg = self.inputs.cfg
         tv = cfg.tv_every if step % cfg.tv_every == 0 else 0.0
         for r in self.roles:
@@ -111,11 +115,15 @@ class FieldFit:
             vertices = dr.width(values) // f.width
             channel = dr.arange(mi.UInt32, dr.width(values)) % f.width
             g = grads[key] + dr.select(channel == 0, sparsity_gradient(values, cfg.sparsity / vertices), 0.0)
-            if tv:  # tv_gradient averages over every slot: rescale to per-vertex means of each tensor
+            # the empty brick (slot 0) stands for every unallocated brick: it never changes
+            g = dr.select(dr.arange(mi.UInt32, dr.width(values)) < f.layout.vertices_per_brick * f.width, 0.0, g)
+            if tv:  # tv_gradient averages over every slot: rescale to per-vertex means of each channel group
+                if r not in self.neighbours:
+                    self.neighbours[r] = neighbour_vertices(self.state.fields[r])
                 weights = self.params.per_slot(r, tv * cfg.tv_density * f.width,
                                                tv * cfg.tv_color * f.width / (f.channels - 1))
                 weight = dr.gather(mi.Float, from_numpy(mi.Float, weights), channel)
-                g = g + weight * tv_gradient(mi.TensorXf(values, (*f.shape[::-1], f.width)))
+                g = g + weight * tv_gradient(values, f.width, self.neighbours[r])
             if self.hull is not None:  # refit only inside the hull
                 g = g * dr.repeat(self.hull, f.width)
             grads[key] = g

@@ -13,9 +13,9 @@ import numpy as np
 from ..data import load_dataset
 from ..io.run_folder import peak_rss_mib, staged, write_json
 from ..plots import plot_log
-from ..scene import integrator_properties, write_scene
+from ..scene import write_scene
 from .config import FitConfig
-from .fields import fit_integrator, occupancy_sigma, sample_step
+from .fields import fit_integrator, occupancy_resolution, occupancy_sigma, sample_step, scene_properties
 from .report import evaluate, write_previews
 from .train import fit
 
@@ -41,12 +41,12 @@ def write_run(stage, inputs, state, fit_seconds):
     """Everything a finished fit writes beside its checkpoint; returns the metrics."""
     ds, cfg = inputs.ds, inputs.cfg
     integrator = fit_integrator(inputs, state)
-    if cfg.occupancy_resolution:
-        integrator.update_occupancy(cfg.occupancy_resolution, occupancy_sigma(cfg, state))
+    cells = occupancy_resolution(cfg, state) if cfg.occupancy_at_step else 0
+    if cells:
+        integrator.update_occupancy(cells, occupancy_sigma(cfg, state))
     summary, rows, renders = evaluate(ds, integrator, cfg.hull_dilation)
-    props = integrator_properties(inputs.space, samples=cfg.max_samples, step_size=float(sample_step(cfg, state)),
-                                  occupancy_resolution=cfg.occupancy_resolution,
-                                  occupancy_threshold=float(occupancy_sigma(cfg, state)))
+    props = scene_properties(inputs, state, occupancy_resolution=cells,
+                             occupancy_threshold=float(occupancy_sigma(cfg, state)))
     write_scene(stage, {role: state.fields[role] for role in ("full", "bg")}, props,
                 [ds.cameras[v] for v in ds.test])
     write_previews(os.path.join(stage, PREVIEW), renders, list(ds.test[: cfg.preview_views]))
@@ -62,8 +62,11 @@ def write_run(stage, inputs, state, fit_seconds):
         if train_rows else None,
         "max_samples_per_ray": cfg.max_samples, "step_size": sample_step(cfg, state),
         "grid": {r: list(s.shape) for r, s in state.fields.items()},
+        "bricks": {r: {"allocated": s.layout.allocated, "of": int(s.layout.table.size),
+                       "vertices": s.layout.allocated * s.layout.vertices_per_brick} for r, s in state.fields.items()},
+        "space": inputs.space.kind,
         "sh_degree": state.fields["full"].sh_degree, "sh_choice": state.sh_choice,
-        "box": {"kind": ds.box.kind, "lo": state.lo.tolist(), "hi": state.hi.tolist()},
+        "box": {"kind": inputs.box.kind, "lo": state.lo.tolist(), "hi": state.hi.tolist()},
         "occupied_fraction": integrator.occupancy.fraction if integrator.occupancy is not None else None,
         "empty_bg_color_fraction": state.empty_color_fraction,
         "bg_strategy": cfg.bg_strategy,

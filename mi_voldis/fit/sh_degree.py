@@ -25,9 +25,12 @@ def choose_sh_degree(inputs, state, roles):
     scores = {}
     for degree in (0, 1):
         for r in roles:
-            colour = with_sh_degree(kept[r], degree).color
-            state.fields[r] = FieldState(kept[r].density, dr.zeros(mi.TensorXf, colour.shape), kept[r].to_world,
-                                         kept[r].density_scale)
+            trial = with_sh_degree(kept[r], degree)
+            i = dr.arange(mi.UInt32, dr.width(trial.data))
+            channel, empty = i % trial.width, i < trial.layout.vertices_per_brick * trial.width
+            colour = (channel > 0) & (channel < trial.channels) & ~empty  # colour fitted from scratch
+            state.fields[r] = FieldState(trial.layout, dr.select(colour, 0.0, trial.data), trial.channels,
+                                         trial.to_world, trial.density_scale)
         adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2)
         trial = FieldFit(inputs, state, roles, ("full",), fit_bank, phase=10 + degree, schedule=False, adam=adam,
                          rates=(0.0, cfg.lr_color * 2))  # colour only: geometry stays fixed

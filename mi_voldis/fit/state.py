@@ -5,6 +5,8 @@ from dataclasses import dataclass, field
 import mitsuba as mi
 import numpy as np
 
+from ..bricks import Layout
+from ..device import from_numpy
 from ..field_state import FieldState
 from ..io.run_folder import Checkpoint
 from ..optim.adam import Adam
@@ -15,7 +17,7 @@ class FitState:
     """Field states by role, the scene box they live in, and the bookkeeping of the fit.
 
     ``phase``/``step``: where the fit stands ('full', 'bg' or 'done', and the step within the phase);
-    ``occupancy_on``: empty-space skipping has started (after the box was tightened); ``hull_points``:
+    ``occupancy_on``: empty-space skipping has started; ``hull_points``:
     scene-space points of the object's visual hull (kept occupied while the background is refitted);
     ``log``: one row per step; ``phase_times``: seconds per phase; ``sh_choice``: the trial fits that
     chose the spherical-harmonic degree; ``empty_color_fraction``: background vertices whose colour was
@@ -42,8 +44,11 @@ class FitState:
         meta.update(lo=self.lo.tolist(), hi=self.hi.tolist())
         arrays = {}
         for r, s in self.fields.items():
-            arrays[f"{r}/density"] = np.array(s.density)
-            arrays[f"{r}/color"] = np.array(s.color)
+            arrays[f"{r}/table"] = s.layout.table
+            arrays[f"{r}/data"] = np.array(s.data)
+            arrays[f"{r}/shape"] = np.array(s.shape)
+            arrays[f"{r}/brick"] = np.array(s.layout.brick)
+            arrays[f"{r}/channels"] = np.array(s.channels)
             arrays[f"{r}/to_world"] = s.to_world
             arrays[f"{r}/density_scale"] = np.array(s.density_scale)
         adam_arrays, meta["adam_t"] = self.adam.state()
@@ -61,8 +66,10 @@ class FitState:
         arrays, meta = loaded
         fields = {}
         for r in ("full", "bg"):
-            if f"{r}/density" in arrays:
-                fields[r] = FieldState(mi.TensorXf(arrays[f"{r}/density"]), mi.TensorXf(arrays[f"{r}/color"]),
+            if f"{r}/table" in arrays:
+                layout = Layout(tuple(int(v) for v in arrays[f"{r}/shape"]), int(arrays[f"{r}/brick"]),
+                                arrays[f"{r}/table"])
+                fields[r] = FieldState(layout, from_numpy(mi.Float, arrays[f"{r}/data"]), int(arrays[f"{r}/channels"]),
                                        arrays[f"{r}/to_world"], float(arrays[f"{r}/density_scale"]))
         adam.load({k[5:]: v for k, v in arrays.items() if k.startswith("adam/")}, meta["adam_t"])
         return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields,

@@ -48,7 +48,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
     scratch = cfg.bg_strategy == "scratch" and has_masks
     roles = ("full", "bg") if scratch else ("full",)
     if state is None:
-        state = FitState(np.asarray(dataset.box.lo, np.float64), np.asarray(dataset.box.hi, np.float64), adam)
+        state = FitState(np.asarray(inputs.box.lo, np.float64), np.asarray(inputs.box.hi, np.float64), adam)
         init_fields(inputs, state, roles, 0 if cfg.sh_degree in ("auto", 0) else int(cfg.sh_degree))
 
     def checkpoint_at(phase):
@@ -75,7 +75,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
         state.phase_times["bg"] = state.phase_times.get("bg", 0.0) + time.perf_counter() - t0
     if "bg" not in state.fields:  # no masks: nothing to disentangle, the background is the full scene
         full = state.fields["full"]
-        state.fields["bg"] = FieldState(full.density, full.color, full.to_world.copy(), full.density_scale)
+        state.fields["bg"] = FieldState(full.layout, full.data, full.channels, full.to_world.copy(), full.density_scale)
     if has_masks:
         state.empty_color_fraction = clear_empty_background_color(inputs, state)
     state.save(checkpoint, "done", 0)
@@ -84,12 +84,12 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
 
 def fit_full(inputs, state, roles, scratch, checkpoint):
     """The full-scene phase (with the background too for ``scratch``), from ``state.step``; with
-    ``sh_degree`` 'auto' the degree is chosen once the coarse geometry stands (tightening step)."""
+    ``sh_degree`` 'auto' the degree is chosen once the coarse geometry stands (the first refinement)."""
     cfg = inputs.cfg
     problem = FieldFit(inputs, state, roles, roles, inputs.bank)
     t0 = time.perf_counter()
     start = state.step
-    sh_step = cfg.tighten_at_step or cfg.resolution_schedule[-1][0]
+    sh_step = cfg.resolution_schedule[1][0] if len(cfg.resolution_schedule) > 1 else cfg.steps_full // 3
     eval_fn = held_out_psnr(inputs, problem)
     common = dict(log=state.log, checkpoint=checkpoint, checkpoint_every=cfg.checkpoint_every, eval_fn=eval_fn,
                   eval_every=cfg.eval_every, progress=inputs.progress)

@@ -31,6 +31,22 @@ def save_field(directory, stem, density, color, to_world, density_scale=1.0):
             f'{_transform("to_world", to_world)}')
 
 
+def save_grid(directory, stem, layout, values, to_world, density_scale=1.0):
+    """Write ``<stem>_grid.npz``, a brick grid (:mod:`mi_voldis.bricks`: its ``table``, the allocated
+    bricks' raw ``values`` (bricks * B^3, channels), ``vertices`` and the box as ``bbox``), and return
+    the ``<medium>`` XML body for it. Written to a temporary file and renamed."""
+    to_world = np.asarray(to_world, dtype=np.float64)
+    corners = np.array([[x, y, z, 1.0] for x in (0, 1) for y in (0, 1) for z in (0, 1)]) @ to_world.T
+    name = f"{stem}_grid.npz"
+    tmp = os.path.join(directory, name + ".tmp.npz")
+    np.savez(tmp, table=layout.table, data=np.asarray(values, np.float32), vertices=np.array(layout.shape),
+             brick=np.array(layout.brick), bbox=np.stack([corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)]))
+    os.replace(tmp, os.path.join(directory, name))
+    return (f'<string name="grid" value={quoteattr(name)}/>'
+            f'<float name="density_scale" value="{density_scale:.9g}"/>'
+            f'{_transform("to_world", to_world)}')
+
+
 def sensor_xml(to_world, fov_x, width, height, spp=1, principal=(0.0, 0.0)):
     """A perspective sensor (Mitsuba camera frame: +x left, +y up, +z forward), box-filtered RGB film."""
     return (f'<sensor type="perspective"><float name="fov" value="{fov_x:.9g}"/>'

@@ -5,7 +5,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .. import grid
+from .. import bricks, grid
 from ..activations import sigmoid, softplus
 from ..io.vol import grid_values, read_header, read_vol
 from ..transforms import to_matrix
@@ -49,10 +49,18 @@ class RadianceField(mi.Medium):
          harmonics of degree 1 / 2, ordered basis-major (channel 3 k + rgb). (Required)
        - |exposed|, |differentiable|
 
+     * - grid
+       - |string|
+       - Instead of ``density`` and ``color``: a sparse brick grid (:mod:`mi_voldis.bricks`), a
+         ``.npz`` file with ``table`` (bz, by, bx) brick slots, ``data`` (allocated bricks, B^3
+         vertices, 1 + colour channels) raw values, ``vertices`` (X, Y, Z) and ``bbox`` (the box, as
+         a ``.vol`` header has it). In memory: the tensors ``table`` and ``data`` and the vector
+         ``vertices``. |exposed| ``data``, |differentiable| (the packed values, empty brick first).
+
      * - to_world
        - |transform|
        - Maps the unit cube [0, 1]^3 onto the field's box. (Default: the bounding box stored in the
-         density ``.vol`` header; the unit cube for tensors)
+         density ``.vol`` header or the grid file; the unit cube for tensors)
 
      * - density_scale
        - |float|
@@ -96,8 +104,15 @@ class RadianceField(mi.Medium):
     def __init__(self, props):
         super().__init__(props)
         name = props.id() or "radiance_field"
-        density, bbox = _load_grid(props, "density", name)
-        color, _ = _load_grid(props, "color", name)
+        self.layout = None
+        if "grid" in props or "table" in props:
+            self.layout, self._data, self.channels, bbox = _load_bricks(props, name)
+            self._check_channels(self.channels - 1)
+            self._density = self._color = None
+        else:
+            density, bbox = _load_grid(props, "density", name)
+            color, _ = _load_grid(props, "color", name)
+            self._density, self._color = density, color
         if "to_world" in props:
             self.to_world = to_matrix(props.get("to_world"))
         elif bbox is not None:
@@ -112,32 +127,46 @@ class RadianceField(mi.Medium):
         self.density_scale = float(props.get("density_scale", 1.0))
         if not self.density_scale > 0:
             raise ValueError(f"{name}: density_scale must be positive, got {self.density_scale}")
-        self._density, self._color, self._packed = density, color, None
+        self._packed = None
         self.parameters_changed()
 
     # ---------------------------------------------------------------- Mitsuba object protocol
     def traverse(self, callback):
+        if self.layout is not None:
+            callback.put("data", self._data, mi.ParamFlags.Differentiable)
+            return
         callback.put("density", self.density, mi.ParamFlags.Differentiable)
         callback.put("color", self.color, mi.ParamFlags.Differentiable)
 
     def parameters_changed(self, keys=None):
+        if self.layout is not None:
+            data = self._data
+            rows, width = self.layout.slots * self.layout.vertices_per_brick, grid.packet_width(self.channels)
+            if tuple(data.shape) != (rows, width):
+                raise ValueError(f"radiance_field: brick data must have shape ({rows}, {width}), got "
+                                 f"{tuple(data.shape)}")
+            self.shape, self.width, self._packed = self.layout.shape, width, data.array
+            return
         d, c = self.density, self.color
         if len(d.shape) != 4 or d.shape[3] != 1:
             raise ValueError(f"radiance_field: density must have shape (Z, Y, X, 1), got {tuple(d.shape)}")
         if len(c.shape) != 4 or tuple(c.shape[:3]) != tuple(d.shape[:3]):
             raise ValueError(f"radiance_field: color must have shape {tuple(d.shape[:3])} + (C,), "
                              f"got {tuple(c.shape)}")
-        if c.shape[3] not in SH_DEGREES:
-            raise ValueError(f"radiance_field: color needs 3, 12 or 27 channels (RGB or SH degree 1/2), "
-                             f"got {c.shape[3]}")
+        self._check_channels(c.shape[3])
         if min(d.shape[:3]) < 2:
             raise ValueError(f"radiance_field: the grid needs at least 2 vertices per axis, got "
                              f"{grid.grid_shape(d)}")
         self.shape = grid.grid_shape(d)
-        self.sh_degree = SH_DEGREES[c.shape[3]]
         self.channels = 1 + c.shape[3]
         self.width = grid.packet_width(self.channels)
         self._packed = None  # packed on first use: a step that sets both tensors packs them once
+
+    def _check_channels(self, colour):
+        if colour not in SH_DEGREES:
+            raise ValueError(f"radiance_field: color needs 3, 12 or 27 channels (RGB or SH degree 1/2), "
+                             f"got {colour}")
+        self.sh_degree = SH_DEGREES[colour]
 
     # ------------------------------------------------------------ values: tensors or packed
     density = _unpacked_tensor("_density", "Raw density tensor (Z, Y, X, 1).")
@@ -145,7 +174,8 @@ class RadianceField(mi.Medium):
 
     @property
     def packed(self):
-        """Density and colour interleaved per vertex (:func:`mi_voldis.grid.pack`): what lookups read."""
+        """Density and colour interleaved per vertex (:func:`mi_voldis.grid.pack`; for a brick grid its
+        data, empty brick first): what lookups read."""
         if self._packed is None:
             with dr.resume_grad():  # first read may happen where gradients are suspended (mi.render's primal)
                 self._packed = grid.pack([self._density, self._color])
@@ -157,18 +187,28 @@ class RadianceField(mi.Medium):
 
         Fitting optimises this array directly, so that a step neither packs the two tensors nor
         unpacks their gradients; ``density`` and ``color`` are unpacked from it when next read."""
-        expected = self.shape[0] * self.shape[1] * self.shape[2] * self.width
+        vertices = self.layout.slots * self.layout.vertices_per_brick if self.layout is not None else \
+            self.shape[0] * self.shape[1] * self.shape[2]
+        expected = vertices * self.width
         if dr.width(packed) != expected:
             raise ValueError(f"radiance_field: packed grid needs {expected} values, got {dr.width(packed)}")
+        if self.layout is not None:
+            self._data = mi.TensorXf(packed, (vertices, self.width))
+            self._packed = packed
+            return
         self._packed, self._density, self._color = packed, None, None
 
     def _unpack(self):
+        if self.layout is not None:
+            raise ValueError("radiance_field: a brick grid has no dense density and color tensors (see "
+                             "mi_voldis.bricks.to_dense)")
         if self._density is None:
             self._density, self._color = grid.unpack(self._packed, [1, self.channels - 1],
                                                      self.shape[::-1])
 
     def to_string(self):
-        return (f"RadianceField[shape={self.shape}, sh_degree={self.sh_degree}, "
+        kind = f"bricks={self.layout.allocated}/{self.layout.table.size}, " if self.layout is not None else ""
+        return (f"RadianceField[shape={self.shape}, {kind}sh_degree={self.sh_degree}, "
                 f"density_scale={self.density_scale}, to_world={self.to_world.tolist()}]")
 
     # -------------------------------------------------------------------- field evaluation
@@ -184,8 +224,21 @@ class RadianceField(mi.Medium):
     def lookup(self, p, data=None, active=True):
         """Raw values at local points ``p`` (clamped to the unit cube): the ``channels`` interpolated
         grid channels, density first (Float arrays)."""
-        return grid.trilinear(self.packed if data is None else data, self.shape, self.width,
-                              self.channels, p, active)
+        data = self.packed if data is None else data
+        if self.layout is not None:
+            return bricks.trilinear(data, self.layout, self.width, self.channels, p, active)
+        return grid.trilinear(data, self.shape, self.width, self.channels, p, active)
+
+    def density_vertices(self, raw_threshold):
+        """Local positions (n, 3) (NumPy) of the vertices whose raw density exceeds ``raw_threshold``."""
+        if self.layout is not None:
+            (i, j, k), inside = self.layout.device_coords()
+            raw = dr.gather(mi.Float, self.packed, dr.arange(mi.UInt32, dr.width(i)) * self.width)
+            keep = dr.compress(inside & (raw > raw_threshold))
+            coords = np.stack([np.array(dr.gather(mi.UInt32, c, keep)) for c in (i, j, k)], -1)
+            return coords / (np.array(self.shape, np.float64) - 1)
+        z, y, x = np.nonzero(np.array(self.density, np.float32)[..., 0] > raw_threshold)
+        return np.stack([x, y, z], -1) / (np.array(self.shape, np.float64) - 1)
 
     def activate(self, v, d, active=True):
         """``(sigma, color)`` from raw values ``v`` (:meth:`lookup`) seen along ``d``: sigma =
@@ -228,3 +281,51 @@ def _load_grid(props, key, name):
 
 
 mi.register_medium("radiance_field", lambda props: RadianceField(props))
+
+
+def _load_bricks(props, name):
+    """(Layout, packed data tensor (slots * B^3, width) with the empty brick first, channels, bbox or
+    None) of a brick grid given as a ``grid`` file or as ``table`` / ``data`` / ``vertices`` /
+    ``brick`` properties (``data`` either the allocated bricks' values, or with ``channels`` the packed
+    array itself, empty brick included, as a field state holds it)."""
+    bbox = None
+    if "grid" in props:
+        path = str(mi.file_resolver().resolve(props.get("grid")))
+        try:
+            with np.load(path) as f:
+                table, data, vertices, brick = f["table"], f["data"], f["vertices"], int(f["brick"])
+                bbox = tuple(np.asarray(f["bbox"], np.float64)) if "bbox" in f.files else None
+        except (OSError, ValueError, KeyError) as e:
+            raise ValueError(f"{path}: not a brick grid file ({e})") from None
+    else:
+        for key in ("table", "data", "vertices", "brick"):
+            if key not in props:
+                raise ValueError(f"{name}: a brick grid needs 'table', 'data', 'vertices' and 'brick'")
+        table, data = np.array(props.get("table")), props.get("data")
+        vertices, brick = np.array(props.get("vertices"), np.float64), int(props.get("brick"))
+        path = name
+    shape = tuple(int(v) for v in np.ravel(vertices))
+    if len(shape) != 3:
+        raise ValueError(f"{path}: a brick grid needs vertices (X, Y, Z), got {shape}")
+    try:
+        layout = bricks.Layout(shape, brick, np.asarray(table).astype(np.uint32).reshape(
+            bricks.counts(shape, brick)[::-1]))
+    except ValueError as e:
+        raise ValueError(f"{path}: {e}") from None
+    b3 = brick ** 3
+    rows, cols = tuple(data.shape) if len(data.shape) == 2 else (-1, -1)
+    if "channels" in props and rows == layout.slots * b3 and cols == grid.packet_width(int(props.get("channels"))):
+        if not dr.all(dr.isfinite(data.array)):
+            raise ValueError(f"{path}: brick data contains NaN or Inf values")
+        return layout, data, int(props.get("channels")), bbox  # the packed array itself
+    if rows != layout.allocated * b3 or cols < 4:
+        raise ValueError(f"{path}: brick data must hold {layout.allocated} bricks of {b3} vertices x channels, "
+                         f"got shape {tuple(data.shape)}")
+    data = np.asarray(data, np.float32)
+    if not np.all(np.isfinite(data)):
+        raise ValueError(f"{path}: brick data contains NaN or Inf values")
+    width = grid.packet_width(cols)
+    values = np.zeros((layout.slots * b3, width), np.float32)
+    values[:b3] = bricks.empty_values(width, cols)
+    values[b3:, :cols] = data
+    return layout, mi.TensorXf(values), cols, bbox

@@ -53,6 +53,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
        - |float|
        - If positive, each ray takes samples every ``step_size`` units of scene space over its
          interval (rounded to a whole number of equal steps), so short rays take fewer. (Default: 0)
+     * - near
+       - |float|
+       - Rays start this far (world units) from their origin: forward-facing captures have nothing
+         closer to the cameras than their near depth bound, and a fit must not put anything there.
+         (Default: 0)
      * - fg_to_world, bg_to_world
        - |transform|
        - Moves the foreground (background): its fields are evaluated at T^-1 p. (Default: identity)
@@ -66,9 +71,15 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
        - Forward-facing scenes: sample and store the fields in the NDC space of this reference camera
          (Mitsuba frame), near plane and scales 2f/W, 2f/H; the fields' ``to_world`` then maps the unit
          cube into NDC space. See :mod:`mi_voldis.space`. (Default: world space)
+     * - contract_to_world, contract_shell
+       - |transform|, |float|
+       - Scenes of any extent (360-degree captures with far background, forward-facing captures seen
+         from other paths): sample and store the fields in contracted space, the normalising transform
+         and the outer shell's width b (:mod:`mi_voldis.space`); needs ``step_size`` > 0, and then
+         ``samples`` bounds the samples evaluated per ray. (Default: world space)
 
-    Every ray is sampled at one set of distances t_i = t_0 + (i + u) dt over the union of the fields'
-    boxes, with one jitter u per ray; the fields are evaluated at those points (foreground lookups at
+    Every ray is sampled at one set of points with one jitter u per ray (see
+    :class:`mi_voldis.render.march.Path`); the fields are evaluated at those points (foreground lookups at
     T_fg^-1 p) and combined per sample, w_fg = w_full - w_bg and c_fg = c_full - c_bg (paper Eq. 3),
     then summed by the chosen rule. Quadrature: see :mod:`mi_voldis.render.quadrature`.
 
@@ -108,12 +119,20 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         self.step_size = float(props.get("step_size", 0.0))
         if self.step_size < 0:
             raise ValueError(f"voldis: step_size must be >= 0, got {self.step_size}")
+        self.near = float(props.get("near", 0.0))
+        if not self.near >= 0:
+            raise ValueError(f"voldis: near must be >= 0, got {self.near}")
         self.fg_to_world = to_matrix(props.get("fg_to_world") if "fg_to_world" in props else None)
         self.bg_to_world = to_matrix(props.get("bg_to_world") if "bg_to_world" in props else None)
         for name, m in (("fg_to_world", self.fg_to_world), ("bg_to_world", self.bg_to_world)):
             if abs(np.linalg.det(m[:3, :3])) < 1e-12:
                 raise ValueError(f"voldis: {name} must be invertible")
-        if "ndc_to_world" in props:
+        if "contract_to_world" in props:
+            self.space = SceneSpace("contract", to_matrix(props.get("contract_to_world")),
+                                    shell=float(props.get("contract_shell", 1.0)))
+            if self.step_size <= 0:
+                raise ValueError("voldis: a contracted space needs step_size > 0 (scene units between samples)")
+        elif "ndc_to_world" in props:
             self.space = SceneSpace("ndc", to_matrix(props.get("ndc_to_world")), props.get("ndc_near", 1.0),
                                     (props.get("ndc_scale_x", 1.0), props.get("ndc_scale_y", 1.0)))
         else:
@@ -143,7 +162,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         """This integrator's properties (all but the fields), as :func:`mi_voldis.scene.build_integrator`
         and :func:`mi_voldis.scene.write_scene` take them: change some to build a variant of it."""
         props = {"composition": self.composition, "mode": self.mode, "samples": self.samples,
-                 "step_size": self.step_size, "occupancy_resolution": self.occupancy_resolution,
+                 "step_size": self.step_size, "near": self.near, "occupancy_resolution": self.occupancy_resolution,
                  "occupancy_threshold": self.occupancy_threshold, **self.space.integrator_properties()}
         for name, m in (("fg_to_world", self.fg_to_world), ("bg_to_world", self.bg_to_world)):
             if not is_identity(m):
@@ -192,19 +211,29 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         return layer_io.EXR_LAYERS + (("res",) if "residual" in self.fields else ())
 
     # ---------------------------------------------------------------------------- planning
-    def plan(self, layers=None, samples=None):
-        """The :class:`march.Plan` computing ``layers`` (default: all) with ``samples`` per ray."""
+    def plan(self, layers=None, samples=None, distortion=()):
+        """The :class:`march.Plan` computing ``layers`` (default: all) with ``samples`` per ray, and the
+        distortion loss of the ``distortion`` layers."""
         layers = tuple(layers or (MODES + (("res",) if "residual" in self.fields else ())))
-        key = (layers, samples or self.samples)
+        key = (layers, samples or self.samples, tuple(distortion))
         if key not in self._plans:
             lookups, sources = self._lookups()
             needed = mixing.needed_sources(self.composition, sources, layers)
             boxes = tuple(lk.to_local for lk in lookups
                           if lk.key != sources.fg_color and lk.warp is None)  # density-carrying boxes
+            skip = self.skip_length()
             self._plans[key] = march.Plan(tuple(lk for lk in lookups if lk.key in needed), sources,
                                           self.composition, layers, key[1], boxes, self.space, self.occupancy,
-                                          self.step_size)
+                                          self.step_size, skip, key[2], self.near)
         return self._plans[key]
+
+    def skip_length(self):
+        """Contracted space: the step across an empty occupancy cell. Density reaches at most one voxel
+        into the one-cell dilation around occupied cells (:class:`Occupancy`), so a step shorter than a
+        cell minus the largest voxel, taken from an empty cell, never reaches density."""
+        if self.occupancy is None:
+            return 0.0
+        return max(0.9 * (self.occupancy.cell_size - self.occupancy.reach), self.step_size)
 
     def _lookups(self):
         ident = np.eye(4)

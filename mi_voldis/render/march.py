@@ -4,9 +4,17 @@ A :class:`Plan` fixes what one march computes: which field lookups (field, world
 the composition rule, the layers wanted and the number of samples. The primal pass accumulates,
 for every (chain, layer) term of :mod:`mixing`, the sums  sum_i w_i (g_i, k_i, k_i t_i).
 
+Where samples lie (:class:`Path`): in world and NDC space rays are straight and take ``samples``
+stratified samples t_i = t0 + (i + u) dt over their interval in the fields' boxes (or as many as fit
+at ``step``). In contracted space rays are curves: the march steps along the world ray, each step
+one ``step`` long in scene space (:meth:`mi_voldis.space.SceneSpace.step_length`), a sample at the
+fraction u of each step; across cells the occupancy grid marks empty it takes steps of one cell
+(``skip``), which cannot cross the one-cell dilation around occupied cells, so no dense feature is
+stepped over. A ray stops after ``samples`` evaluated samples there.
+
 The adjoint replays the march front to back (as Mitsuba's PRB integrators do). The lookups' raw
-values at every sample can be recorded by the primal (:class:`Record`, 16 bytes per sample and
-lookup for RGB fields, kept up to RECORD_BYTES): the replay then reads them in contiguous runs
+values at every evaluated sample can be recorded by the primal (:class:`Record`, 16 bytes per sample
+and lookup for RGB fields, kept up to RECORD_BYTES): the replay then reads them in contiguous runs
 instead of gathering the 8 grid corners again, and only the gradient scatters touch the grids.
 Without a record the replay reads the grids, and memory does not grow with the number of samples.
 
@@ -21,6 +29,16 @@ w_i = exp(-sum_{j<i} x_j) (1 - exp(-x_i)):
 With the adjoint dL the replay keeps rho = <dL, sum_{j>i} w_j g_j> per chain (initialised from the
 primal sums, decremented sample by sample) and back-propagates, per sample,
 ``<dL, w_i g_i> - rho x_i`` through the field lookups: its gradient is exactly the one above.
+
+The distortion loss of Mip-NeRF 360 on a chain (samples at path positions s_i, scene units, with
+interval lengths delta_i),
+
+    L_dist = sum_i sum_j w_i w_j |s_i - s_j| + 1/3 sum_i w_i^2 delta_i = 2 P + Q / 3,
+    P = sum_i w_i (s_i W_<i - S_<i),   Q = sum_i w_i^2 delta_i,   W_<i = sum_{j<i} w_j,  S_<i = sum_{j<i} w_j s_j,
+
+is accumulated by the primal in one pass. Its gradient is that of sum_i w_i a_i with the a_i held
+fixed, a_i = dL/dw_i = 2 (2 s_i W_<i - 2 S_<i + S - s_i W) + 2/3 w_i delta_i (W, S: the totals), so the
+replay treats it as one more term with colour a_i, and sum_i w_i a_i = 2 L_dist starts its rho.
 """
 from dataclasses import dataclass
 
@@ -50,7 +68,8 @@ class Lookup:
 
 @dataclass
 class Rays:
-    """World rays (o, d), their scene-space form (o_s, d_s) and the sampled range [t0, t1] of t'."""
+    """World rays (o, d), their scene-space form (o_s, d_s; in contracted space the normalised ray)
+    and the sampled range [t0, t1] of t' (world t in contracted space)."""
     o: object
     d: object
     o_s: object
@@ -73,6 +92,9 @@ class Plan:
     space: object
     occupancy: object = None
     step: float = 0.0  # > 0: samples every ``step`` scene units (at most ``samples`` per ray)
+    skip: float = 0.0  # contracted space: the step across empty occupancy cells (scene units)
+    distortion: tuple = ()  # layers ("full", "bg") whose chain's distortion loss the march computes
+    near: float = 0.0  # world distance from the ray origin where sampling starts
 
     def __post_init__(self):
         # Chains and terms depend only on the rule and layers: find them once with placeholder values.
@@ -80,6 +102,8 @@ class Plan:
         sig, terms = mixing.compose(self.rule, self.sources, self.layers, dummy)
         object.__setattr__(self, "chains", tuple(sig))
         object.__setattr__(self, "terms", tuple(terms))
+        roles = {"full": self.sources.full, "bg": self.sources.bg}
+        object.__setattr__(self, "distortion_chains", {layer: roles[layer] for layer in self.distortion})
 
     @property
     def fields(self):
@@ -97,9 +121,18 @@ def term_name(chain, layer):
 
 def prepare_rays(plan, o, d, t_min=0.0, t_max=dr.inf):
     """Scene-space rays and their sampled interval: the union of the plan's boxes, clipped to
-    [t_min, t_max] in world space (to [0, 1) of t' in NDC space)."""
-    o_s, d_s, t_limit = plan.space.ray(o, d)
-    if not plan.space.is_world:
+    [t_min, t_max] in world space (to [0, 1) of t' in NDC space; in contracted space the world
+    interval up to where the contraction reaches ``FAR`` times its inner half-size)."""
+    space = plan.space
+    if plan.near > 0:
+        t_min = dr.maximum(t_min, plan.near)
+    if space.is_curved:
+        o_n, d_n = space.normalize(o), apply_vector(space.from_world_m, d)
+        t0 = dr.maximum(dr.full(mi.Float, 0.0, dr.width(d)), t_min)  # one per ray: records size by it
+        t1 = dr.minimum(mi.Float(t_max), _cube_exit(o_n, d_n, FAR))
+        return Rays(o, d, o_n, d_n, t0, dr.maximum(t1, t0), t0 < t1)
+    o_s, d_s, t_limit = space.ray(o, d)
+    if not space.is_world:
         t_min, t_max = 0.0, t_limit
     t0, t1, hit = sample_interval(plan.boxes, o_s, d_s, t_min, t_max)
     occupied = plan.occupancy.bounds() if plan.occupancy is not None else None
@@ -108,14 +141,66 @@ def prepare_rays(plan, o, d, t_min=0.0, t_max=dr.inf):
     return Rays(o, d, o_s, d_s, t0, t1, hit)
 
 
+FAR = 1e4  # contracted space: rays end where ||x_n||_inf = FAR (the contraction is within b 1e-4 of its limit)
+
+
+def _cube_exit(o, d, m):
+    """World t where the normalised ray o + t d leaves the cube [-m, m]^3 (o inside it)."""
+    t = mi.Float(dr.inf)
+    for a in range(3):
+        t = dr.minimum(t, dr.select(d[a] == 0.0, dr.inf, (dr.sign(d[a]) * m - o[a]) / d[a]))
+    return t
+
+
 def sample_count(plan, rays):
-    """Samples per ray and their spacing dt in t: ``samples`` over [t0, t1], or with a ``step`` as many
-    as fit at that scene-space spacing (at least 1, at most ``samples``)."""
+    """Straight rays: samples per ray and their spacing dt in t, ``samples`` over [t0, t1], or with a
+    ``step`` as many as fit at that scene-space spacing (at least 1, at most ``samples``). Curved rays:
+    at most ``samples`` evaluated samples."""
+    if plan.space.is_curved:
+        return plan.samples, None
     length = rays.t1 - rays.t0
     if plan.step > 0:
         n = dr.clip(mi.UInt32(dr.ceil(length * dr.norm(rays.d_s) / plan.step)), 1, plan.samples)
         return n, length / mi.Float(n)
     return plan.samples, length * (1.0 / plan.samples)
+
+
+class Path:
+    """Where the samples of a batch of rays lie (module docstring): ``sample(i, b)`` gives sample i's
+    scene point p, world distance t, scene-space interval length delta, whether it lies in an
+    occupied cell, its position s along the path (scene units), and the next ``b`` (curved rays: the
+    world t and the path position where the next step starts)."""
+
+    def __init__(self, plan, rays, u):
+        self.plan, self.rays, self.u = plan, rays, u
+        self.n, self.dt = sample_count(plan, rays)
+        if not plan.space.is_curved:
+            self.delta = self.dt * dr.norm(rays.d_s)
+
+    def start(self):
+        return mi.Float(self.rays.t0), mi.Float(0.0)
+
+    def sample(self, i, b):
+        plan, rays, space = self.plan, self.rays, self.plan.space
+        if not space.is_curved:
+            t = rays.t0 + (mi.Float(i) + self.u) * self.dt
+            p = rays.o_s + t * rays.d_s
+            occupied = plan.occupancy.lookup(p) if plan.occupancy is not None else mi.Bool(True)
+            return p, _distance(plan, rays, t, p), self.delta, occupied, (mi.Float(i) + self.u) * self.delta, b
+        t_b, s_b = b
+        x = rays.o_s + t_b * rays.d_s
+        occupied = plan.occupancy.lookup(space.contract(x)) if plan.occupancy is not None else mi.Bool(True)
+        step = dr.select(occupied, plan.step, plan.skip) if plan.occupancy is not None else mi.Float(plan.step)
+        dt = step / space.step_length(x, rays.d_s)
+        t = t_b + self.u * dt
+        return (space.contract(rays.o_s + t * rays.d_s), t, mi.Float(plan.step), occupied, s_b + self.u * step,
+                (t_b + dt, s_b + step))
+
+    def more(self, i, k, b):
+        """Whether samples remain after ``i`` samples of which ``k`` were evaluated, next start ``b``."""
+        if self.plan.space.is_curved:
+            return (b[0] < self.rays.t1) & (k < self.n)
+        return i < self.n
 
 
 def _distance(plan, rays, t, p):
@@ -126,14 +211,12 @@ def _distance(plan, rays, t, p):
 
 
 def _sample(plan, data, p, d, active, raw=None):
-    """Chains' densities and the terms at scene-space points ``p`` seen along world directions ``d``.
-    Samples in unoccupied cells are not evaluated (every density is 0 there).
+    """Chains' densities and the terms at scene-space points ``p`` seen along world directions ``d``,
+    where ``active`` (elsewhere every density is 0).
 
     ``raw``: the lookups' raw values at these points, recorded by the primal (:class:`Record`), or
     None. Given, the lookups take their values from it and read nothing from the grids: only their
     gradients go there (their gathers have no use left and drop out of the kernel)."""
-    if plan.occupancy is not None:
-        active = active & plan.occupancy.lookup(p)
     values, lookups = {}, {}
     for lk in plan.lookups:
         q = p if lk.warp is None else plan.space.from_world(apply_point(lk.warp, plan.space.to_world(p)))
@@ -145,14 +228,14 @@ def _sample(plan, data, p, d, active, raw=None):
         lookups[lk.key] = v
         values[lk.key] = (*lk.field.activate(v, apply_vector(lk.to_frame, d), inside), inside)
     sig, terms = mixing.compose(plan.rule, plan.sources, plan.layers, values)
-    return sig, terms, active, lookups
+    return sig, terms, lookups
 
 
 class Record:
-    """The raw values of every lookup at every sample of a primal march, for its adjoint to replay
-    instead of reading the grids again. Sample i of ray r sits at slot i * rays + r, so that a SIMD
-    packet of neighbouring rays writes and reads one contiguous run; ``samples``: the most any ray
-    takes."""
+    """The raw values of every lookup at every evaluated sample of a primal march, for its adjoint to
+    replay instead of reading the grids again. The k-th evaluated sample of ray r sits at slot
+    k * rays + r, so that a SIMD packet of neighbouring rays writes and reads one contiguous run;
+    ``samples``: the most any ray evaluates."""
 
     def __init__(self, plan, rays, samples):
         self.rays = rays
@@ -183,15 +266,15 @@ class Record:
         return out
 
 
-def _continue(i, depth, n):
-    """Keep marching while samples remain and some chain is still transparent enough to matter."""
+def _transparent(depth):
+    """Some chain is still transparent enough to matter (early termination)."""
     lowest = None
     for s in depth.values():
         lowest = s if lowest is None else dr.minimum(lowest, s)
-    return (i < n) & (lowest < quadrature.OPTICAL_DEPTH_CUTOFF)
+    return lowest < quadrature.OPTICAL_DEPTH_CUTOFF
 
 
-def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None):
+def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, probe=None):
     """The march over a batch of rays, primal or adjoint, through one loop body.
 
     ``mode`` ``dr.ADMode.Primal``: returns ``(acc, stats)``: {"chain|layer": [R, G, B, alpha,
@@ -208,76 +291,107 @@ def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None):
     no grid values).
 
     ``data``: id(field) -> packed grid; ``rays``: from :func:`prepare_rays`; ``u``: per-ray jitter
-    in [0, 1) of the stratified samples t_i = t0 + (i + u) dt (see :func:`sample_count`)."""
+    in [0, 1) of the samples (see :class:`Path`); ``probe(p, w, active)``: called by the primal with
+    every sample's scene point and chains' weights (e.g. to find where rays end)."""
     primal = mode == dr.ADMode.Primal
-    n, dt = sample_count(plan, rays)
-    delta = dt * dr.norm(rays.d_s)
+    path = Path(plan, rays, u)
     zero = dr.zeros(mi.Float, dr.width(rays.t0))
     depth = {c: mi.Float(zero) for c in plan.chains}
     fg_chains = (plan.sources.full_q, plan.sources.bg_q) if "fg" in plan.layers else None
     if primal:  # loop state: the sums and the statistics
-        carry = ({term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms},
-                 {"evaluated": mi.Float(zero), "fg_coverage": mi.Float(zero)})
+        sums = {term_name(*k): [mi.Float(zero) for _ in range(COMPONENTS)] for k in plan.terms}
+        sums.update({dist_name(c): [mi.Float(zero) for _ in range(4)] for c in plan.distortion_chains.values()})
+        carry = (sums, {"evaluated": mi.Float(zero), "fg_coverage": mi.Float(zero)})
     else:  # loop state: rho = <dL, sum_{j>i} w_j g_j> per chain, from the primal's sums
-        carry = {c: mi.Float(zero) for c in plan.chains}
+        rho = {c: mi.Float(zero) for c in plan.chains}
         for chain, layer in plan.terms:
             g_rgb, g_a, g_d = grads[layer]
             a = acc[term_name(chain, layer)]
-            carry[chain] += g_rgb[0] * a[0] + g_rgb[1] * a[1] + g_rgb[2] * a[2] + g_a * a[3] + g_d * a[4]
+            rho[chain] += g_rgb[0] * a[0] + g_rgb[1] * a[1] + g_rgb[2] * a[2] + g_a * a[3] + g_d * a[4]
+        for layer, c in plan.distortion_chains.items():  # sum_i w_i a_i = 2 L_dist
+            rho[c] += grads["distortion"][layer] * 2.0 * distortion_value(acc[dist_name(c)])
+        # and the running sums W_<i, S_<i of each distortion chain
+        carry = (rho, {c: (mi.Float(zero), mi.Float(zero)) for c in plan.distortion_chains.values()})
 
-    def body(i, active, depth, carry):
-        t = rays.t0 + (mi.Float(i) + u) * dt
-        p = rays.o_s + t * rays.d_s
+    def body(i, k, b, active, depth, carry):
+        p, t, delta, occupied, s, b = path.sample(i, b)
+        evaluate = active & occupied
         with dr.resume_grad(when=not primal):
-            raw = record.read(i, active) if record is not None and not primal else None
-            sig, terms, occupied, lookups = _sample(plan, data, p, rays.d, active, raw)
-            t = _distance(plan, rays, t, p)
+            raw = record.read(k, evaluate) if record is not None and not primal else None
+            sig, terms, lookups = _sample(plan, data, p, rays.d, evaluate, raw)
             x = {c: sig[c] * delta for c in plan.chains}
             w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
             if primal:
-                carry = _accumulate(plan, carry, terms, w, t, occupied, fg_chains)
+                carry = _accumulate(plan, carry, terms, w, t, evaluate, fg_chains, s, delta)
                 if record is not None:
-                    record.write(i, lookups, active)
+                    record.write(k, lookups, evaluate)
+                if probe is not None:
+                    probe(p, w, evaluate)
             else:
-                carry = _backpropagate(plan, carry, terms, w, x, t, grads, active)
+                carry = _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc)
         depth = {c: depth[c] + dr.detach(x[c]) for c in plan.chains}
-        i = i + 1
-        return i, active & _continue(i, depth, n), depth, carry
+        i, k = i + 1, k + dr.select(evaluate, 1, 0)
+        return i, k, b, active & path.more(i, k, b) & _transparent(depth), depth, carry
 
-    state = (mi.UInt32(0), mi.Bool(active) & rays.hit, depth, carry)
-    _, _, _, carry = dr.while_loop(state, lambda i, a, *_: a, body,
-                                   label="voldis primal" if primal else "voldis adjoint")
+    state = (mi.UInt32(0), mi.UInt32(0), path.start(), mi.Bool(active) & rays.hit, depth, carry)
+    *_, carry = dr.while_loop(state, lambda i, k, b, a, *_: a, body,
+                              label="voldis primal" if primal else "voldis adjoint")
     return carry if primal else None
 
 
-def _accumulate(plan, carry, terms, w, t, occupied, fg_chains):
-    """Primal step: add sample i's w (g, k, k t) to every term's sums; count the sample."""
+def dist_name(chain):
+    return f"dist|{chain}"
+
+
+def distortion_value(sums):
+    """L_dist = 2 P + Q / 3 from a chain's distortion sums [W, S, P, Q] (module docstring)."""
+    return 2.0 * sums[2] + sums[3] * (1.0 / 3.0)
+
+
+def _accumulate(plan, carry, terms, w, t, occupied, fg_chains, s, delta):
+    """Primal step: add sample i's w (g, k, k t) to every term's sums and its distortion terms; count
+    the sample."""
     acc, stats = dict(carry[0]), dict(carry[1])
     for (chain, layer), (g, k) in terms.items():
         a = acc[term_name(chain, layer)]
         wk = w[chain] * k
         acc[term_name(chain, layer)] = [dr.fma(w[chain], g[0], a[0]), dr.fma(w[chain], g[1], a[1]),
                                          dr.fma(w[chain], g[2], a[2]), a[3] + wk, dr.fma(wk, t, a[4])]
+    for c in plan.distortion_chains.values():
+        big_w, big_s, p, q = acc[dist_name(c)]
+        wc = w[c]
+        acc[dist_name(c)] = [big_w + wc, dr.fma(wc, s, big_s), dr.fma(wc, s * big_w - big_s, p),
+                              dr.fma(wc * wc, delta, q)]
     stats["evaluated"] = stats["evaluated"] + dr.select(occupied, 1.0, 0.0)
     if fg_chains is not None and fg_chains[0] != fg_chains[1]:
         stats["fg_coverage"] = stats["fg_coverage"] + dr.maximum(w[fg_chains[0]] - w[fg_chains[1]], 0.0)
     return acc, stats
 
 
-def _backpropagate(plan, rho, terms, w, x, t, grads, active):
+def _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc):
     """Adjoint step: back-propagate <dL, w_i g_i> - rho x_i of every chain through sample i's lookups
-    (its gradient is dL/dg_i and dL/dx_i of the module docstring) and move rho past sample i."""
+    (its gradient is dL/dg_i and dL/dx_i of the module docstring; the distortion loss a term with
+    colour a_i) and move rho and the distortion's running sums past sample i."""
+    rho, running = dict(carry[0]), dict(carry[1])
     value = {c: mi.Float(0.0) for c in plan.chains}
     for (chain, layer), (g, k) in terms.items():
         g_rgb, g_a, g_d = grads[layer]
         value[chain] += w[chain] * (dr.dot(g_rgb, g) + k * dr.fma(g_d, t, g_a))
-    rho = dict(rho)
+    for layer, c in plan.distortion_chains.items():
+        big_w, big_s = acc[dist_name(c)][:2]
+        w_before, s_before = running[c]
+        wc = dr.detach(w[c])
+        a = 2.0 * (2.0 * (s * w_before - s_before) + big_s - s * big_w) + (2.0 / 3.0) * wc * delta
+        value[c] += grads["distortion"][layer] * w[c] * a
+        running[c] = (w_before + wc, dr.fma(wc, s, s_before))
     objective = mi.Float(0.0)
     for c in plan.chains:
         rho[c] = rho[c] - dr.detach(value[c])
         objective += value[c] - rho[c] * x[c]
-    dr.backward_from(dr.select(active & dr.isfinite(objective), objective, 0.0))
-    return rho
+    # AllowNoGrad: a tracked field may receive nothing (its layers absent from the loss)
+    dr.backward_from(dr.select(active & dr.isfinite(objective), objective, 0.0),
+                     flags=dr.ADFlag.Default | dr.ADFlag.AllowNoGrad)
+    return rho, running
 
 
 RECORD_BYTES = 1 << 30  # largest Record kept; larger batches replay by reading the grids again (0: never)
@@ -305,13 +419,13 @@ class Forward:
     record: Record | None
 
 
-def forward(plan, rays, u, active=True, keep_record=False):
+def forward(plan, rays, u, active=True, keep_record=False, probe=None):
     """Primal march of ``rays`` (from :func:`prepare_rays`) over the fields' current values; with
     ``keep_record`` the lookups' raw values are kept (when they fit RECORD_BYTES) for
-    :func:`backward`."""
+    :func:`backward`; ``probe``: see :func:`march`."""
     record = new_record(plan, rays) if keep_record else None
     data = {id(f): dr.detach(f.packed) for f in plan.fields}
-    acc, stats = march(dr.ADMode.Primal, plan, data, rays, u, active, record)
+    acc, stats = march(dr.ADMode.Primal, plan, data, rays, u, active, record, probe=probe)
     return Forward(plan, rays, u, active, acc, stats, record)
 
 

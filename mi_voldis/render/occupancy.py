@@ -18,7 +18,8 @@ from ..grid import dilate_cells
 class Occupancy:
     """Boolean grid of shape (Z, Y, X) over the scene-space box [lo, hi]."""
 
-    def __init__(self, lo, hi, cells):
+    def __init__(self, lo, hi, cells, reach=0.0):
+        self.reach = reach  # how far density reaches beyond a marked vertex: the largest voxel of the fields
         self.lo, self.hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
         self.cells = np.asarray(cells, bool)
         self.shape = self.cells.shape[::-1]  # (X, Y, Z)
@@ -36,6 +37,11 @@ class Occupancy:
         m = np.diag([*(1.0 / (hi - lo)), 1.0])
         m[:3, 3] = -lo / (hi - lo)
         return m
+
+    @property
+    def cell_size(self):
+        """Smallest edge of a cell (scene units)."""
+        return float(np.min((self.hi - self.lo) / np.array(self.shape)))
 
     @property
     def fraction(self):
@@ -61,19 +67,21 @@ class Occupancy:
         size = hi - lo
         shape = np.maximum(1, np.ceil(resolution * size / size.max()).astype(int))  # (X, Y, Z)
         cells = np.zeros(shape[::-1], bool)
+        reach = 0.0
         for lk in lookups:
             raw_threshold = float(inverse_softplus(sigma_threshold / lk.field.density_scale))
-            density = np.array(lk.field.density, np.float32)[..., 0]
-            z, y, x = np.nonzero(density > raw_threshold)
-            if len(x) == 0:
+            local = lk.field.density_vertices(raw_threshold)
+            if len(local) == 0:
                 continue
-            res = np.array(lk.field.shape, np.float64) - 1
-            local = np.stack([x, y, z], -1) / res
             scene = local_to_scene(lk, space, local)
             _mark(cells, lo, size, scene)
+            m = np.linalg.inv(lk.to_local)  # the lookup's voxel in scene units (before any warp)
+            reach = max(reach, float(np.max(np.linalg.norm(m[:3, :3], axis=0) / (np.array(lk.field.shape) - 1))))
         if extra is not None and len(extra):
             _mark(cells, lo, size, np.asarray(extra, np.float64))
-        return Occupancy(lo, hi, dilate_cells(cells))
+        occupancy = Occupancy(lo, hi, dilate_cells(cells))
+        occupancy.reach = reach
+        return occupancy
 
 
 def local_to_scene(lk, space, local):

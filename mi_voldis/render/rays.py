@@ -20,6 +20,9 @@ class _RenderRays(dr.CustomOp):
         self.sums = layer_io.raw_sums(plan, self.fwd.acc)
         out = layer_io.finalize(self.sums)
         out.update(self.fwd.stats)  # per-ray statistics, not differentiable
+        if plan.distortion_chains:
+            out["distortion"] = {layer: march.distortion_value(self.fwd.acc[march.dist_name(c)])
+                                 for layer, c in plan.distortion_chains.items()}
         dr.eval(out)
         return out
 
@@ -27,6 +30,8 @@ class _RenderRays(dr.CustomOp):
         grad_out = self.grad_out()
         plan = self.fwd.plan
         raw = layer_io.finalize_adjoint(self.sums, {k: grad_out[k] for k in plan.layers})
+        if plan.distortion_chains:
+            raw["distortion"] = grad_out["distortion"]
         grads = march.backward(self.fwd, raw)
         self.set_grad_in("tracked", tuple(grads[id(f)] for f in plan.fields if grads[id(f)] is not None))
 
@@ -34,7 +39,7 @@ class _RenderRays(dr.CustomOp):
         return "voldis.render_rays"
 
 
-def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=0.0, t_max=dr.inf):
+def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=0.0, t_max=dr.inf, distortion=()):
     """Layers of the scene along rays ``o + t d`` (world space, ``d`` unit length).
 
     ``u``: per-ray jitter in [0, 1) of the stratified samples; ``t_min``, ``t_max``: world-space
@@ -43,7 +48,9 @@ def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=
     ``{layer: (rgb, alpha, depth)}`` (premultiplied ``mi.Color3f``, ``mi.Float``, ``mi.Float``),
     differentiable with respect to the fields' ``density`` and ``color`` tensors, plus
     ``"evaluated"``: the samples evaluated per ray (occupied cells, before early termination) and
-    ``"fg_coverage"``: sum_i max(w_fg,i, 0) (see :func:`march.march`), neither differentiable."""
-    plan = integrator.plan(tuple(layers), samples)
+    ``"fg_coverage"``: sum_i max(w_fg,i, 0) (see :func:`march.march`), neither differentiable; with
+    ``distortion`` (layers among ``full``, ``bg``), ``"distortion"``: {layer: its per-ray distortion
+    loss} (:mod:`mi_voldis.render.march`), differentiable."""
+    plan = integrator.plan(tuple(layers), samples, tuple(distortion))
     tracked = tuple(f.packed for f in plan.fields if dr.grad_enabled(f.packed))
     return dr.custom(_RenderRays, tracked, plan, mi.Point3f(o), mi.Vector3f(d), mi.Float(u), t_min, t_max)

@@ -16,7 +16,8 @@ import numpy as np
 from ..data import DatasetError, load_dataset
 from ..device import from_numpy
 from ..export import linear_channels, previews
-from ..field_state import density_raw_for_alpha, init_state, shape_for
+from ..field_state import density_raw_for_alpha, shape_for
+from ..fieldspec import box_transform, field_dict
 from ..io.exr import write_exr
 from ..io.images import contact_sheet, write_png
 from ..io.run_folder import Checkpoint, peak_rss_mib, write_json
@@ -59,20 +60,20 @@ class FittedRun:
 
     def foreground_box(self, margin=0.1, threshold_alpha=1e-2):
         """Scene-space box around where the full and background fields differ (the object's
-        disentangled volume), grown by ``margin`` of its size; the whole field box if they never do."""
+        disentangled volume: vertices of the full field at least ``threshold_alpha`` opaque per voxel
+        whose raw density the background does not share), grown by ``margin`` of its size and two
+        voxels; the whole field box if they never differ."""
         full, bg = self.fields["full"], self.fields["bg"]
-        a, b = np.array(full.density)[..., 0], np.array(bg.density)[..., 0]
-        if a.shape != b.shape:
-            raise ValueError("full and background grids differ in shape; cannot locate the object")
-        voxel = np.max(np.diag(full.to_world)[:3] / (np.array(full.shape) - 1))
-        raw = density_raw_for_alpha(threshold_alpha, voxel, full.density_scale)
-        diff = (np.maximum(a, b) > raw) & (np.abs(a - b) > 1e-3)
-        z, y, x = np.nonzero(diff)
-        corners = np.array([[0, 0, 0], [1, 1, 1]], np.float64)
-        if len(x):
-            res = np.array(full.shape, np.float64) - 1
-            corners = np.stack([[x.min(), y.min(), z.min()], [x.max(), y.max(), z.max()]]) / res
-        pts = corners @ full.to_world[:3, :3].T + full.to_world[:3, 3]
+        voxel = np.max(np.abs(np.diag(full.to_world)[:3]) / (np.array(full.shape) - 1))
+        local = full.density_vertices(density_raw_for_alpha(threshold_alpha, voxel, full.density_scale))
+        pts = local @ full.to_world[:3, :3].T + full.to_world[:3, 3]
+        if len(pts):
+            a = np.array(full.lookup(from_numpy(mi.Point3f, local))[0])
+            b = np.array(bg.lookup(from_numpy(mi.Point3f, pts @ bg.world_to_local[:3, :3].T +
+                                              bg.world_to_local[:3, 3]))[0])
+            pts = pts[np.abs(a - b) > 1e-3]
+        if not len(pts):
+            pts = np.array([[0, 0, 0], [1, 1, 1]], np.float64) @ full.to_world[:3, :3].T + full.to_world[:3, 3]
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         pad = margin * (hi - lo) + 2 * voxel
         return lo - pad, hi + pad
@@ -92,13 +93,12 @@ class FittedRun:
 
 
 def edit_field(lo, hi, resolution, density_raw=-30.0, color_raw=0.0, channels=3, density_scale=1.0):
-    """Plugin dict of a new field over the scene-space box [lo, hi] (``resolution`` vertices along
+    """Plugin dict of a new dense field over the scene-space box [lo, hi] (``resolution`` vertices along
     its longest side), constant raw density and colour."""
-    shape = shape_for(lo, hi, resolution)
-    state = init_state(lo, hi, resolution, (int(np.sqrt(channels // 3)) - 1), density_raw, density_scale)
-    z, y, x = shape[::-1]
-    state.color = dr.full(mi.TensorXf, color_raw, (z, y, x, channels))
-    return state.plugin()
+    x, y, z = shape_for(lo, hi, resolution)
+    return field_dict(np.full((z, y, x, 1), density_raw, np.float32), np.full((z, y, x, channels), color_raw,
+                                                                                np.float32),
+                      box_transform(lo, hi), density_scale)
 
 
 def residual_field(run, resolution, init_alpha, init_color):
