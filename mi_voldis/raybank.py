@@ -32,17 +32,17 @@ class RayBank:
         return len(self.views) * self.height * self.width
 
     def batch(self, rng, n, pool=None, tile=1):
-        """Rays, colours and masks of ``n`` random pixels (of ``pool``, flat indices, when given), each
-        at a random position inside its pixel; ``tile`` > 1: in tiles of tile x tile pixels, each
-        around a random pixel (of ``pool``)."""
+        """Rays, colours, masks and views (indices into this bank's views) of ``n`` random pixels (of
+        ``pool``, flat indices, when given), each at a random position inside its pixel; ``tile`` > 1: in
+        tiles of tile x tile pixels, each around a random pixel (of ``pool``)."""
         count = -(-n // (tile * tile))
         anchors = rng.integers(0, self.pixels, count) if pool is None else pool[rng.integers(0, len(pool), count)]
         idx = tile_pixels(rng, anchors, tile, self.height, self.width)[:n] if tile > 1 else anchors
         return self.rays(idx.astype(np.uint32), rng.random((n, 2), np.float32))
 
     def rays(self, index, jitter):
-        """World rays (o, d), colours and masks of flat pixel indices; ``jitter`` (n, 2) in [0, 1)
-        places each ray inside its pixel."""
+        """World rays (o, d), colours, masks and views (UInt32, indices into this bank's views) of flat
+        pixel indices; ``jitter`` (n, 2) in [0, 1) places each ray inside its pixel."""
         index = from_numpy(mi.UInt32, index)
         hw = self.height * self.width
         view = index // hw
@@ -54,7 +54,7 @@ class RayBank:
         o, d = self.table.rays(view, u, v)
         color = dr.gather(mi.Color3f, self.colors, index)
         mask = dr.gather(mi.Float, self.masks, index)
-        return o, d, color, mask
+        return o, d, color, mask, view
 
 
 def tile_pixels(rng, anchors, tile, height, width):

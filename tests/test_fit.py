@@ -92,7 +92,7 @@ def test_settings_round_trip_and_help(tiny_run):
                           text=True, check=True).stdout
     for name in FitConfig.names():
         assert f"  {name} = " in text, name
-    assert "steps_full = 800" in text
+    assert "steps_full = null" in text and "minutes = \"auto\"" in text
 
 
 def test_train_script_errors_name_the_dataset(tmp_path):
@@ -137,7 +137,7 @@ def test_render_script_from_dataset_cameras(tiny_run, tmp_path):
 
 
 @pytest.mark.parametrize("item, message", [
-    ("resolution_schedule=[[0,0]]", "resolution_schedule must be a non-empty list of [step, vertices] pairs"),
+    ("resolution_schedule=[[0,0]]", "resolution_schedule must be null or a non-empty list of [step, vertices] pairs"),
     ("resolution_schedule=[]", "resolution_schedule must be"),
     ("resolution_schedule=[[5,32]]", "the first at step 0"),
     ("resolution_schedule=[[0,32],[10,8],[10,16]]", "steps increasing"),

@@ -52,7 +52,7 @@ def test_ray_batches_reuse_their_kernel(tiny_dataset, history):
     ds = load_dataset(tiny_dataset)
     bank = RayBank(ds, ds.train)
     for step in range(6):
-        o, d, color, mask = bank.batch(np.random.default_rng(step), 333)
+        o, d, color, mask, _ = bank.batch(np.random.default_rng(step), 333)
         dr.eval(o, d, color, mask)
     hashes = history()
     assert len(hashes) == 6 and len(set(hashes)) == 1

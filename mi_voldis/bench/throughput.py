@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..device import from_numpy
-from ..fieldspec import box_transform, field_dict
+from ..fieldspec import box_transform, brick_field_dict, field_dict
 from ..optim.adam import Adam
 from ..optim.parameters import PackedParameters
 from ..render import march
@@ -24,19 +24,22 @@ def device_rays(kind, n, seed):
     return from_numpy(mi.Point3f, o), from_numpy(mi.Vector3f, d), from_numpy(mi.Float, u)
 
 
-def make_integrator(resolution, samples, channels=3, seed=0):
+def make_integrator(resolution, samples, channels=3, seed=0, representation="bricks"):
+    """Two random fields (raw density normal(-1, 1), colour normal(0, 1)) of R^3 vertices over [-1, 1]^3,
+    dense or in bricks (every brick allocated: the same field)."""
     rng = np.random.default_rng(seed)
     box = box_transform([-1, -1, -1], [1, 1, 1])
     shape = (resolution,) * 3
-    specs = {role: field_dict(rng.normal(-1, 1, shape + (1,)), rng.normal(0, 1, shape + (channels,)), box)
+    make = brick_field_dict if representation == "bricks" else field_dict
+    specs = {role: make(rng.normal(-1, 1, shape + (1,)), rng.normal(0, 1, shape + (channels,)), box)
              for role in ("full", "bg")}
     return mi.load_dict({"type": "voldis", "samples": samples, **specs}, optimize=False)
 
 
-def trainer(resolution, samples, channels=3, fields=("full",), rays="random"):
+def trainer(resolution, samples, channels=3, fields=("full",), rays="random", representation="bricks"):
     """(integrator, step function): ``step(batch, seed)`` runs one training step as fitting does
     (forward, backward, Adam on the packed grids) on fresh ``rays`` and returns the samples evaluated."""
-    integ = make_integrator(resolution, samples, channels)
+    integ = make_integrator(resolution, samples, channels, representation=representation)
     params = PackedParameters({role: integ.fields[role] for role in fields})
     adam = Adam({key: 1e-2 for key in params})
     target = mi.Color3f(0.5, 0.4, 0.3)
@@ -56,10 +59,10 @@ def trainer(resolution, samples, channels=3, fields=("full",), rays="random"):
     return integ, step
 
 
-def step_functions(resolution, samples, batch, channels=3, fields=("full",), rays="random"):
+def step_functions(resolution, samples, batch, channels=3, fields=("full",), rays="random", representation="bricks"):
     """{"forward": f, "train": f}: ``f(seed)`` runs one forward (no gradients) or one training step
     (forward + backward + Adam) on fresh ``rays``, waits for it, and returns the samples evaluated."""
-    integ, train_step = trainer(resolution, samples, channels, fields, rays)
+    integ, train_step = trainer(resolution, samples, channels, fields, rays, representation)
     layers = tuple(dict.fromkeys(fields))
 
     def forward(seed):

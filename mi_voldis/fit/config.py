@@ -11,8 +11,10 @@ from ..settings import Settings, setting
 
 
 def _schedule_error(schedule):
-    """Why ``schedule`` is not a list of [step, vertices] pairs starting at step 0, steps increasing."""
-    what = "a non-empty list of [step, vertices] pairs, the first at step 0, steps increasing, vertices >= 2"
+    """Why ``schedule`` is not null or a list of [step, vertices] pairs starting at step 0, steps increasing."""
+    what = "null or a non-empty list of [step, vertices] pairs, the first at step 0, steps increasing, vertices >= 2"
+    if schedule is None:
+        return None
     if not schedule or not all(isinstance(p, list) and len(p) == 2 and all(isinstance(v, int) and
                                                                               not isinstance(v, bool) for v in p)
                                for p in schedule):
@@ -21,6 +23,26 @@ def _schedule_error(schedule):
     if steps[0] != 0 or any(b <= a for a, b in zip(steps, steps[1:])) or min(p[1] for p in schedule) < 2:
         return what
     return None
+
+
+def _minutes_error(value):
+    if value is None or value == "auto" or (isinstance(value, (int, float)) and not isinstance(value, bool)
+                                            and 0.05 <= value <= 1e4):
+        return None
+    return "'auto', null or a number of minutes (0.05 to 10000)"
+
+
+def _resolution_error(value):
+    if value == "auto" or (isinstance(value, int) and not isinstance(value, bool) and value >= 4):
+        return None
+    return "'auto' or a whole number >= 4"
+
+
+def _fractions_error(value):
+    if isinstance(value, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value) \
+            and all(0 < v < 1 for v in value) and all(a < b for a, b in zip(value, value[1:])):
+        return None
+    return "a list of increasing fractions in (0, 1)"
 
 
 @dataclass
@@ -33,11 +55,26 @@ class FitConfig(Settings):
     contract_shell: float = setting(1.0, "contracted space: the outer shell's share b of the scene cube "
                                          "[-(1 + b), 1 + b]^3 (1: Mip-NeRF 360)", above=0)
 
-    # ---- schedule: coarse to fine, as data
-    resolution_schedule: list = setting([[0, 48], [250, 96], [500, 128]],
-                                        "[[step, vertices along the box's longest side], ...], coarse to fine",
-                                        check=_schedule_error)
-    steps_full: int = setting(800, "steps of the full-scene phase", low=1)
+    # ---- schedule: coarse to fine, as data (mi_voldis/fit/schedule.py derives what is left null / 'auto')
+    minutes: float | str | None = setting("auto", "time budget of the fit on this machine: the number of steps is "
+                                                  "chosen to fill it ('auto': 2.5 min per million training pixels, "
+                                                  "1.5 to 10; null: steps_full)", check=_minutes_error)
+    steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
+    resolution: int | str = setting("auto", "final vertices along the scene box's longest side ('auto': a voxel "
+                                            "about pixels_per_voxel pixels of the training views wide)",
+                                    check=_resolution_error)
+    pixels_per_voxel: float = setting(1.0, "'auto' resolution: voxel width in training-view pixels", above=0)
+    max_resolution: int = setting(1024, "cap on the final resolution (and the density scale's unit)", low=8)
+    min_epochs: float = setting(6.0, "with a time budget, the final resolution lets its stage pass this many "
+                                     "times over the training pixels", above=0)
+    coarse_resolution: int = setting(64, "resolution of the first stage", low=4)
+    stages: int = setting(4, "coarse-to-fine stages, each doubling the resolution", low=1, high=8)
+    stage_starts: list = setting([0.1, 0.2, 0.35], "where stages 2, 3, ... start, as fractions of steps_full",
+                                 check=_fractions_error)
+    calibration_steps: int = setting(200, "steps of the first stage timed to plan the rest", low=10)
+    resolution_schedule: list | None = setting(None, "explicit [[step, vertices along the box's longest side], "
+                                                     "...] (null: derived from the settings above)",
+                                               check=_schedule_error)
     steps_bg: int = setting(150, "steps of the background refit (bg_strategy 'refit')", low=0)
     batch_rays: int = setting(8192, "random rays per step, drawn across all training views", low=1)
     batch_tile: int = setting(1, "> 1: rays in tile x tile pixel tiles (coherent: faster marches, worse "
@@ -68,6 +105,10 @@ class FitConfig(Settings):
     tv_every: int = setting(4, "apply the TV gradient (scaled by this) every k steps: it costs a pass over "
                                "the whole grid", low=1)
     sparsity: float = setting(1e-5, "L1 on activated density: empty space stays empty", low=0)
+    exposure: bool = setting(False, "fit a per-image affine colour correction of the photographs (exposure, white "
+                                   "balance; left out for novel views)")
+    exposure_lr: float = setting(1e-3, "Adam learning rate of the colour corrections", above=0)
+    exposure_weight: float = setting(1e-2, "pull of the colour corrections towards the identity", low=0)
     distortion: float = setting(0.01, "weight of Mip-NeRF 360's distortion loss, ray positions in units of the "
                                       "scene box (pulls each ray's weights into one compact peak: no floaters)",
                                 low=0)
@@ -106,10 +147,8 @@ class FitConfig(Settings):
     eval_views: int = setting(3, "held-out views rendered for that log", low=0)
     preview_views: int = setting(3, "held-out views written as PNG previews", low=0)
 
-    def resolution_at(self, step):
-        """Grid resolution the schedule sets for ``step``."""
-        res = self.resolution_schedule[0][1]
-        for start, r in self.resolution_schedule:
-            if step >= start:
-                res = r
-        return res
+    def check(self):
+        if self.minutes is None and self.steps_full is None:
+            raise ValueError("minutes and steps_full cannot both be null: the fit needs a budget or a step count")
+        if self.resolution_schedule is not None and self.steps_full is None:
+            raise ValueError("an explicit resolution_schedule needs steps_full")

@@ -17,6 +17,7 @@ from ..scene import build_integrator, integrator_properties
 from ..space import SceneBox, SceneSpace
 from ..transforms import apply_point
 from .config import FitConfig
+from .schedule import coarse_resolution, finest_resolution
 
 
 @dataclass(frozen=True)
@@ -45,11 +46,12 @@ def cell_size(lo, hi, resolution):
 
 def init_fields(inputs, state, roles, sh_degree):
     """Fields of ``roles`` at the schedule's first resolution, every voxel equally faintly opaque
-    (``density_init_alpha`` per sample step), raw densities per voxel of the finest resolution."""
+    (``density_init_alpha`` per sample step), raw densities per voxel of the finest resolution
+    (:func:`~mi_voldis.fit.schedule.finest_resolution`)."""
     cfg = inputs.cfg
-    res = cfg.resolution_schedule[0][1]
+    res = coarse_resolution(cfg)
     step = cell_size(state.lo, state.hi, res) * cfg.step_voxels
-    scale = 1.0 / cell_size(state.lo, state.hi, cfg.resolution_schedule[-1][1])
+    scale = 1.0 / cell_size(state.lo, state.hi, finest_resolution(cfg))
     raw = density_raw_for_alpha(cfg.density_init_alpha, step, scale)
     for r in roles:
         state.fields[r] = new_field(state.lo, state.hi, res, sh_degree, raw, scale, cfg.brick)
@@ -79,7 +81,7 @@ def ray_weights(inputs, integrator, role):
     chain = plan.sources.full if role == "full" else plan.sources.bg
     res = mi.Vector3f(*[float(s - 1) for s in layout.shape])
 
-    def probe(p, w, active):
+    def probe(p, w, active, depth):
         v = mi.Vector3u(dr.clip(apply_point(to_local, p), 0.0, 1.0) * res + 0.5) // layout.brick
         dr.scatter_reduce(dr.ReduceOp.Max, best, w[chain], (v.z * by + v.y) * bx + v.x, active)
 
@@ -89,7 +91,7 @@ def ray_weights(inputs, integrator, role):
     with dr.suspend_grad():
         for s in range(0, count, 1 << 17):
             idx = np.sort(pixels[s:s + (1 << 17)]).astype(np.uint32)
-            o, d, _, _ = bank.rays(idx, np.full((len(idx), 2), 0.5, np.float32))
+            o, d, *_ = bank.rays(idx, np.full((len(idx), 2), 0.5, np.float32))
             rays = march.prepare_rays(plan, o, d)
             march.forward(plan, rays, dr.full(mi.Float, 0.5, len(idx)), probe=probe)
             dr.eval(best)

@@ -4,6 +4,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .. import exposure
 from ..device import from_numpy
 from ..field_state import neighbour_vertices
 from ..losses import background_loss, full_loss
@@ -11,6 +12,7 @@ from ..optim.parameters import PackedParameters
 from ..regularizers import sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
 from .fields import fit_integrator, occupancy_resolution, occupancy_sigma, refine
+from .schedule import resolution_at
 
 
 def backdrop(ds, rng, n):
@@ -33,9 +35,10 @@ class FieldFit:
     vertex) when given; ``schedule``: follow the resolution schedule and start empty-space skipping."""
 
     def __init__(self, inputs, state, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
-                 rates=None):
+                 rates=None, fit_exposure=False):
         self.inputs, self.state, self.roles, self.layers, self.bank = inputs, state, roles, layers, bank
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
+        self.fit_exposure = fit_exposure and state.exposure is not None
         self.adam = state.adam if adam is None else adam
         cfg = inputs.cfg
         self.rates = (cfg.lr_density, cfg.lr_color) if rates is None else rates  # (density, colour)
@@ -46,9 +49,12 @@ class FieldFit:
     def rebuild(self):
         self.integrator = fit_integrator(self.inputs, self.state)
         self.params = PackedParameters({r: self.integrator.fields[r] for r in self.roles})
-        self.keys = list(self.params)
         for r in self.roles:
             self.adam.lrs[f"{r}.packed"] = self.params.per_slot(r, *self.rates)
+        if self.fit_exposure:
+            self.params["exposure"] = self.state.exposure
+            self.adam.lrs["exposure"] = self.inputs.cfg.exposure_lr
+        self.keys = list(self.params)
         self.neighbours = {}  # per role, made when the TV first needs them
         if self.state.occupancy_on:
             self.update_occupancy()
@@ -59,17 +65,19 @@ class FieldFit:
                                          occupancy_sigma(self.inputs.cfg, self.state), extra)
 
     def sync_states(self):
-        """Copy the optimised values back into the fit state's fields."""
+        """Copy the optimised values back into the fit state's fields (and colour corrections)."""
         for r in self.roles:
             self.state.fields[r].data = self.integrator.fields[r].packed
+        if self.fit_exposure:
+            self.state.exposure = self.params["exposure"]
 
     # -- schedule
     def before_step(self, step):
         cfg, state = self.inputs.cfg, self.state
-        upsample = self.schedule and any(step == start for start, _ in cfg.resolution_schedule[1:])
+        upsample = self.schedule and any(step == start for start, _ in state.schedule[1:])
         if upsample:
             self.sync_states()
-            refine(self.inputs, state, self.integrator, self.roles, cfg.resolution_at(step))
+            refine(self.inputs, state, self.integrator, self.roles, resolution_at(state.schedule, step))
             self.adam.reset()
             self.rebuild()
         start = self.schedule and cfg.occupancy_at_step and step >= cfg.occupancy_at_step and not state.occupancy_on
@@ -78,12 +86,16 @@ class FieldFit:
             self.sync_states()
             self.update_occupancy()
 
+    def after_step(self, step):
+        if self.fit_exposure:  # shared corrections belong to the scene's colours (mi_voldis.exposure)
+            self.params["exposure"] = exposure.centre(self.params["exposure"])
+
     # -- loss
     def loss(self, step):
         cfg = self.inputs.cfg
         rng = np.random.default_rng([cfg.seed, self.phase, step])
         n = cfg.batch_rays
-        o, d, color, mask = self.bank.batch(rng, n, self.pool, cfg.batch_tile)
+        o, d, color, mask, view = self.bank.batch(rng, n, self.pool, cfg.batch_tile)
         distortion = tuple(layer for layer in self.layers if layer in ("full", "bg")) if cfg.distortion else ()
         out = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(n, np.float32)), self.layers,
                           distortion=distortion)
@@ -93,14 +105,23 @@ class FieldFit:
         extent = float(np.max(self.state.hi - self.state.lo))  # ray positions in units of the scene box
         for layer in distortion:
             loss += (cfg.distortion / extent) * dr.mean(out["distortion"][layer])
+
+        def photo(layer):  # what the photograph shows: the layer over the backdrop, colour-corrected
+            pred = out[layer][0] + (1.0 - out[layer][1]) * behind
+            if self.state.exposure is None:
+                return pred
+            params = self.params["exposure"] if self.fit_exposure else dr.detach(self.state.exposure)
+            return exposure.apply(params, view, pred)
         if "full" in self.layers:
-            err = full_loss(out["full"][0] + (1.0 - out["full"][1]) * behind, color)
+            err = full_loss(photo("full"), color)
             loss += err
             stats["psnr"] = psnr_of(err)
         if "bg" in self.layers:
-            err = background_loss(out["bg"][0] + (1.0 - out["bg"][1]) * behind, color, mask)
+            err = background_loss(photo("bg"), color, mask)
             loss += err
             stats["psnr_bg"] = psnr_of(err)
+        if self.fit_exposure:
+            loss += exposure.penalty(self.params["exposure"], cfg.exposure_weight)
         return loss, stats
 
     def extra_gradients(self, step, grads):
@@ -111,6 +132,8 @@ class FieldFit:
         tv = cfg.tv_every if step % cfg.tv_every == 0 else 0.0
         for r in self.roles:
             key, f = f"{r}.packed", self.integrator.fields[r]
+            if key not in grads:
+                continue
             values = dr.detach(self.params[key])
             vertices = dr.width(values) // f.width
             channel = dr.arange(mi.UInt32, dr.width(values)) % f.width

@@ -21,7 +21,7 @@ class FitState:
     scene-space points of the object's visual hull (kept occupied while the background is refitted);
     ``log``: one row per step; ``phase_times``: seconds per phase; ``sh_choice``: the trial fits that
     chose the spherical-harmonic degree; ``empty_color_fraction``: background vertices whose colour was
-    cleared."""
+    cleared; ``schedule``, ``steps_full``: the full phase's plan (:mod:`mi_voldis.fit.schedule`)."""
     lo: np.ndarray
     hi: np.ndarray
     adam: Adam
@@ -34,8 +34,12 @@ class FitState:
     phase_times: dict = field(default_factory=dict)
     sh_choice: dict | None = None
     empty_color_fraction: float | None = None
+    exposure: object = None  # per training image colour corrections (mi_voldis.exposure), or None
+    schedule: list | None = None  # [[step, resolution], ...] of the full phase, once planned
+    steps_full: int | None = None  # its steps, once planned
 
-    META = ("phase", "step", "occupancy_on", "log", "phase_times", "sh_choice", "empty_color_fraction")
+    META = ("phase", "step", "occupancy_on", "log", "phase_times", "sh_choice", "empty_color_fraction", "schedule",
+            "steps_full")
 
     def save(self, path, phase, step):
         """Checkpoint at ``phase``/``step`` (atomically replaces ``path``)."""
@@ -55,6 +59,8 @@ class FitState:
         arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
         if self.hull_points is not None:
             arrays["hull_points"] = self.hull_points
+        if self.exposure is not None:
+            arrays["exposure"] = np.array(self.exposure)
         Checkpoint(path).save(arrays, meta)
 
     @classmethod
@@ -72,5 +78,6 @@ class FitState:
                 fields[r] = FieldState(layout, from_numpy(mi.Float, arrays[f"{r}/data"]), int(arrays[f"{r}/channels"]),
                                        arrays[f"{r}/to_world"], float(arrays[f"{r}/density_scale"]))
         adam.load({k[5:]: v for k, v in arrays.items() if k.startswith("adam/")}, meta["adam_t"])
-        return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields,
-                   hull_points=arrays.get("hull_points"), **{key: meta[key] for key in cls.META})
+        exposure = from_numpy(mi.Float, arrays["exposure"]) if "exposure" in arrays else None
+        return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields, hull_points=arrays.get("hull_points"),
+                   exposure=exposure, **{key: meta[key] for key in cls.META})

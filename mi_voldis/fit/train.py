@@ -23,6 +23,7 @@ import time
 import drjit as dr
 import numpy as np
 
+from .. import exposure
 from ..field_state import FieldState
 from ..metrics import psnr
 from ..optim.adam import Adam
@@ -32,6 +33,16 @@ from ..render.views import render_camera
 from .background import background_ray_pool, background_regions, clear_empty_background_color, start_background
 from .fields import FitInputs, init_fields
 from .problem import FieldFit
+from .schedule import (
+    RESERVED,
+    affordable_resolution,
+    auto_minutes,
+    capture_resolution,
+    coarse_resolution,
+    schedule_of,
+    stages,
+    steps_for,
+)
 from .sh_degree import choose_sh_degree
 from .state import FitState
 
@@ -49,6 +60,8 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
     roles = ("full", "bg") if scratch else ("full",)
     if state is None:
         state = FitState(np.asarray(inputs.box.lo, np.float64), np.asarray(inputs.box.hi, np.float64), adam)
+        if cfg.exposure:
+            state.exposure = exposure.identity(len(dataset.train))
         init_fields(inputs, state, roles, 0 if cfg.sh_degree in ("auto", 0) else int(cfg.sh_degree))
 
     def checkpoint_at(phase):
@@ -83,28 +96,63 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
 
 
 def fit_full(inputs, state, roles, scratch, checkpoint):
-    """The full-scene phase (with the background too for ``scratch``), from ``state.step``; with
+    """The full-scene phase (with the background too for ``scratch``), from ``state.step``: the coarse
+    stage's first ``calibration_steps`` at a constant learning rate when the schedule is still to be
+    planned (:mod:`mi_voldis.fit.schedule`), then the planned stages with a decaying rate; with
     ``sh_degree`` 'auto' the degree is chosen once the coarse geometry stands (the first refinement)."""
     cfg = inputs.cfg
-    problem = FieldFit(inputs, state, roles, roles, inputs.bank)
     t0 = time.perf_counter()
-    start = state.step
-    sh_step = cfg.resolution_schedule[1][0] if len(cfg.resolution_schedule) > 1 else cfg.steps_full // 3
+    if state.schedule is None and cfg.resolution_schedule and cfg.steps_full:
+        state.schedule, state.steps_full = cfg.resolution_schedule, cfg.steps_full
+    if state.schedule is None:
+        state.schedule = [[0, coarse_resolution(cfg)]]  # the coarse stage, until planned
+    problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True)
     eval_fn = held_out_psnr(inputs, problem)
     common = dict(log=state.log, checkpoint=checkpoint, checkpoint_every=cfg.checkpoint_every, eval_fn=eval_fn,
                   eval_every=cfg.eval_every, progress=inputs.progress)
+    if state.steps_full is None:
+        optimize(problem, state.adam, steps=cfg.calibration_steps, start=state.step, final_ratio=1.0,
+                 desc="full (calibration)", **common)
+        problem.sync_states()
+        plan_schedule(inputs, state, problem.integrator)
+        state.save(inputs.checkpoint, "full", cfg.calibration_steps)
+    start = state.step
+    sh_step = state.schedule[1][0] if len(state.schedule) > 1 else state.steps_full // 3
     if cfg.sh_degree == "auto" and start < sh_step:
         optimize(problem, state.adam, steps=sh_step, start=start,
-                 final_ratio=cfg.lr_final_ratio ** (sh_step / cfg.steps_full), desc="full (coarse)", **common)
+                 final_ratio=cfg.lr_final_ratio ** (sh_step / state.steps_full), desc="full (coarse)", **common)
         problem.sync_states()
         choose_sh_degree(inputs, state, roles)
         state.adam.reset()
         problem.rebuild()
         start = sh_step
-    optimize(problem, state.adam, steps=cfg.steps_full, start=start, final_ratio=cfg.lr_final_ratio,
+    optimize(problem, state.adam, steps=state.steps_full, start=start, final_ratio=cfg.lr_final_ratio,
              desc="full" if not scratch else "full + bg", **common)
     problem.sync_states()
     state.phase_times["full"] = state.phase_times.get("full", 0.0) + time.perf_counter() - t0
+
+
+def plan_schedule(inputs, state, integrator):
+    """Freeze the full phase's schedule after the calibration steps (:mod:`mi_voldis.fit.schedule`)."""
+    cfg = inputs.cfg
+    coarse = coarse_resolution(cfg)
+    final = cfg.resolution if cfg.resolution != "auto" else capture_resolution(inputs, integrator, state)
+    final = final or cfg.max_resolution
+    if cfg.steps_full is None:
+        rows = [r["step_seconds"] for r in state.log if r["step"] > 20 and "test_psnr" not in r]
+        seconds = float(np.median(rows))
+        minutes = auto_minutes(inputs.ds) if cfg.minutes == "auto" else cfg.minutes
+        spent = state.log[-1]["time"] if state.log else 0.0
+        budget = minutes * 60.0 * (1.0 - RESERVED) - spent
+        if cfg.resolution == "auto":
+            final = min(final, affordable_resolution(cfg, coarse, seconds, budget, inputs.bank.pixels))
+    plan_stages = stages(cfg, coarse, final)
+    if cfg.steps_full is not None:
+        steps = cfg.steps_full
+    else:
+        steps = max(2 * cfg.calibration_steps, steps_for(plan_stages, seconds, budget))
+    state.steps_full = steps
+    state.schedule = schedule_of(plan_stages, steps, cfg.calibration_steps)
 
 
 def held_out_psnr(inputs, problem):

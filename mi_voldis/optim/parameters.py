@@ -2,7 +2,8 @@
 
 
 class PackedParameters(dict):
-    """The fields' packed grids as the optimised parameters, ``{"role.packed": Float}``.
+    """The fields' packed grids as the optimised parameters, ``{"role.packed": Float}`` (other keys, e.g.
+    the colour corrections, are held as they are).
 
     Adam steps on the very arrays the march reads: a step neither packs density and colour tensors
     nor unpacks their gradients (at 128^3 that is three passes over 32 MB per field and step).
@@ -15,8 +16,8 @@ class PackedParameters(dict):
 
     def update(self):
         for key, value in self.items():
-            field = self.fields[key.split(".")[0]]
-            if value is not field.packed:
+            field = self.fields.get(key[:-len(".packed")]) if key.endswith(".packed") else None
+            if field is not None and value is not field.packed:
                 field.set_packed(value)
 
     def per_slot(self, role, density, color):

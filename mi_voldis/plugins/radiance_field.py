@@ -229,6 +229,23 @@ class RadianceField(mi.Medium):
             return bricks.trilinear(data, self.layout, self.width, self.channels, p, active)
         return grid.trilinear(data, self.shape, self.width, self.channels, p, active)
 
+    def density_points(self, raw_threshold):
+        """Local positions (Dr.Jit Point3f) of the vertices whose raw density exceeds ``raw_threshold``."""
+        if self.layout is not None:
+            (i, j, k), inside = self.layout.device_coords()
+            raw = dr.gather(mi.Float, self.packed, dr.arange(mi.UInt32, dr.width(i)) * self.width)
+        else:
+            raw = dr.gather(mi.Float, self.packed, dr.arange(mi.UInt32, int(np.prod(self.shape))) * self.width)
+            v = dr.arange(mi.UInt32, dr.width(raw))
+            i, j, k = v % self.shape[0], (v // self.shape[0]) % self.shape[1], v // (self.shape[0] * self.shape[1])
+            inside = mi.Bool(True)
+        keep = dr.compress(inside & (raw > raw_threshold))
+        if dr.width(keep) == 0:
+            return dr.zeros(mi.Point3f, 0)
+        x, y, z = (float(s - 1) for s in self.shape)
+        return mi.Point3f(mi.Float(dr.gather(mi.UInt32, i, keep)) / x, mi.Float(dr.gather(mi.UInt32, j, keep)) / y,
+                          mi.Float(dr.gather(mi.UInt32, k, keep)) / z)
+
     def density_vertices(self, raw_threshold):
         """Local positions (n, 3) (NumPy) of the vertices whose raw density exceeds ``raw_threshold``."""
         if self.layout is not None:

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..render import layers as layer_io
 from ..render import march, mixing
-from ..render.occupancy import Occupancy, local_to_scene
+from ..render.occupancy import Occupancy, local_to_scene_np
 from ..space import SceneSpace
 from ..transforms import is_identity, to_matrix, to_scalar_transform
 
@@ -187,7 +187,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         """Scene-space axis-aligned bounds of every density-carrying box (after transforms)."""
         lookups, sources = self._lookups()
         corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], np.float64)
-        pts = [local_to_scene(lk, self.space, corners) for lk in lookups if lk.key != sources.fg_color]
+        pts = [local_to_scene_np(lk, self.space, corners) for lk in lookups if lk.key != sources.fg_color]
         pts = np.concatenate(pts)
         return pts.min(axis=0), pts.max(axis=0)
 

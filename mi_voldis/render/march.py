@@ -291,8 +291,9 @@ def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, 
     no grid values).
 
     ``data``: id(field) -> packed grid; ``rays``: from :func:`prepare_rays`; ``u``: per-ray jitter
-    in [0, 1) of the samples (see :class:`Path`); ``probe(p, w, active)``: called by the primal with
-    every sample's scene point and chains' weights (e.g. to find where rays end)."""
+    in [0, 1) of the samples (see :class:`Path`); ``probe(p, w, active, depth)``: called by the primal with
+    every sample's scene point, chains' weights and optical depths before it (e.g. to find where
+    rays end)."""
     primal = mode == dr.ADMode.Primal
     path = Path(plan, rays, u)
     zero = dr.zeros(mi.Float, dr.width(rays.t0))
@@ -326,7 +327,7 @@ def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, 
                 if record is not None:
                     record.write(k, lookups, evaluate)
                 if probe is not None:
-                    probe(p, w, evaluate)
+                    probe(p, w, evaluate, depth)
             else:
                 carry = _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc)
         depth = {c: depth[c] + dr.detach(x[c]) for c in plan.chains}

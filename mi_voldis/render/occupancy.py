@@ -13,6 +13,7 @@ import numpy as np
 
 from ..activations import inverse_softplus
 from ..grid import dilate_cells
+from ..transforms import apply_point
 
 
 class Occupancy:
@@ -62,43 +63,50 @@ class Occupancy:
     def build(lookups, space, resolution, sigma_threshold, boxes_lo, boxes_hi, extra=None):
         """Occupancy of the density-carrying ``lookups`` over the box [boxes_lo, boxes_hi] with
         ``resolution`` cells along its longest side. ``extra``: optional (N, 3) scene-space points that
-        must be occupied (e.g. a region a field is about to grow into)."""
+        must be occupied (e.g. a region a field is about to grow into). Cells are marked on the device;
+        only the cell grid comes back to the host."""
         lo, hi = np.asarray(boxes_lo, np.float64), np.asarray(boxes_hi, np.float64)
         size = hi - lo
         shape = np.maximum(1, np.ceil(resolution * size / size.max()).astype(int))  # (X, Y, Z)
-        cells = np.zeros(shape[::-1], bool)
+        marks = dr.zeros(mi.Float, int(np.prod(shape)))
         reach = 0.0
         for lk in lookups:
             raw_threshold = float(inverse_softplus(sigma_threshold / lk.field.density_scale))
-            local = lk.field.density_vertices(raw_threshold)
-            if len(local) == 0:
+            local = lk.field.density_points(raw_threshold)
+            if dr.width(local) == 0:
                 continue
-            scene = local_to_scene(lk, space, local)
-            _mark(cells, lo, size, scene)
+            _mark(marks, lo, size, shape, local_to_scene(lk, space, local))
             m = np.linalg.inv(lk.to_local)  # the lookup's voxel in scene units (before any warp)
             reach = max(reach, float(np.max(np.linalg.norm(m[:3, :3], axis=0) / (np.array(lk.field.shape) - 1))))
         if extra is not None and len(extra):
-            _mark(cells, lo, size, np.asarray(extra, np.float64))
-        occupancy = Occupancy(lo, hi, dilate_cells(cells))
-        occupancy.reach = reach
-        return occupancy
+            _mark(marks, lo, size, shape, mi.Point3f(*np.asarray(extra, np.float32).T))
+        cells = np.array(marks).reshape(shape[::-1]) > 0
+        return Occupancy(lo, hi, dilate_cells(cells), reach)
 
 
 def local_to_scene(lk, space, local):
-    """Scene-space positions of unit-cube points of a lookup's field (inverse of its lookup map)."""
+    """Scene-space positions (Dr.Jit Point3f) of unit-cube points of a lookup's field (inverse of its
+    lookup map)."""
+    to_scene = np.linalg.inv(lk.to_local)
     if lk.warp is None:
-        m = np.linalg.inv(lk.to_local)
-        return local @ m[:3, :3].T + m[:3, 3]
-    to_scene = np.linalg.inv(lk.to_local)  # field box in scene space, then the world transform
-    p = local @ to_scene[:3, :3].T + to_scene[:3, 3]
-    world = space.to_world_np(p)
+        return apply_point(to_scene, local)
+    world = space.to_world(apply_point(to_scene, local))  # field box in scene space, then the world transform
+    return space.from_world(apply_point(np.linalg.inv(lk.warp), world))
+
+
+def local_to_scene_np(lk, space, local):
+    """NumPy version of :func:`local_to_scene` for (n, 3) points."""
+    to_scene = np.linalg.inv(lk.to_local)
+    p = np.asarray(local, np.float64) @ to_scene[:3, :3].T + to_scene[:3, 3]
+    if lk.warp is None:
+        return p
     inv = np.linalg.inv(lk.warp)
-    return space.from_world_np(world @ inv[:3, :3].T + inv[:3, 3])
+    return space.from_world_np(space.to_world_np(p) @ inv[:3, :3].T + inv[:3, 3])
 
 
-def _mark(cells, lo, size, points):
-    shape = np.array(cells.shape[::-1])
-    idx = np.floor((points - lo) / size * shape).astype(np.int64)
-    ok = np.all((idx >= 0) & (idx < shape), axis=1) & np.all(np.isfinite(points), axis=1)
-    idx = idx[ok]
-    cells[idx[:, 2], idx[:, 1], idx[:, 0]] = True
+def _mark(marks, lo, size, shape, points):
+    """Set the cells (flat Float, 1 = marked) holding the scene-space ``points``."""
+    u = (points - mi.Vector3f(*lo.tolist())) * mi.Vector3f(*(shape / size).tolist())
+    inside = dr.all((u >= 0.0) & (u < mi.Vector3f(*shape.tolist()))) & dr.all(dr.isfinite(points))
+    i = mi.Vector3u(mi.Vector3i(dr.select(inside, u, 0.0)))
+    dr.scatter(marks, 1.0, (i.z * int(shape[1]) + i.y) * int(shape[0]) + i.x, inside)

@@ -127,7 +127,7 @@ class EditProblem:
     def loss(self, step):
         rng = np.random.default_rng([self.seed, 7, step])
         n = self.batch
-        o, d, color, mask = self.bank.batch(rng, n, self.pool)
+        o, d, color, mask, _ = self.bank.batch(rng, n, self.pool)
         out = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(n, np.float32)), self.layers)
         loss = self.loss_fn(out, color, mask)
         return loss, {"samples": float(dr.sum(out["evaluated"])[0])}

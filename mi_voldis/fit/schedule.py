@@ -1,0 +1,135 @@
+"""The coarse-to-fine schedule of a fit, as data: which resolution from which step, and how many steps.
+
+Given explicitly (``resolution_schedule`` and ``steps_full``), it is used as it is. Otherwise it is
+derived from the capture and the time budget once the first, coarse stage has run
+``calibration_steps`` steps (and is then frozen in the fit's checkpoint, so a resumed fit follows it):
+
+* the final resolution (``resolution`` 'auto') makes a voxel about ``pixels_per_voxel`` pixels of the
+  training views wide where their rays end (:func:`capture_resolution`), at most ``max_resolution``,
+  and no finer than lets the last stage show every training pixel ``min_epochs`` times in its share of
+  the budget (:func:`affordable_resolution`): a sharp grid seen too few times is worse than a coarser
+  one seen often;
+* ``stages`` resolutions double up to it, each starting at its ``stage_starts`` fraction of the steps;
+* the number of steps (``steps_full``, or from ``minutes``) fills the budget, with the seconds a step
+  took in the coarse stage scaled to each stage's resolution as (R_k / R_1)^COST_EXPONENT (measured: a
+  step costs its samples, proportional to R, and its vertices, to R^2 on surfaces), leaving
+  ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation.
+"""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+COST_EXPONENT = 1.25
+RESERVED = 0.2
+
+
+def auto_minutes(dataset):
+    """Default budget of a dataset: 2.5 minutes per million training pixels, between 1.5 and 10."""
+    pixels = len(dataset.train) * dataset.size[0] * dataset.size[1] / 1e6
+    return float(np.clip(2.5 * pixels, 1.5, 10.0))
+
+
+def capture_resolution(inputs, integrator, state, rays=1 << 14):
+    """Vertices along the scene box's longest side for which a voxel is ``pixels_per_voxel`` pixels wide,
+    in scene space, where training rays end (the 25th percentile of the footprints, the finer views
+    winning), rounded up to a multiple of 16; from the current fit's depths."""
+    from ..render.rays import render_rays
+    cfg, bank, space = inputs.cfg, inputs.bank, inputs.space
+    rng = np.random.default_rng([cfg.seed, 97])
+    idx = np.sort(rng.choice(bank.pixels, min(rays, bank.pixels), replace=False)).astype(np.uint32)
+    o, d, _, _, view = bank.rays(idx, np.full((len(idx), 2), 0.5, np.float32))
+    with dr.suspend_grad():
+        out = render_rays(integrator, o, d, dr.full(mi.Float, 0.5, len(idx)), ("full",))
+    alpha, depth = np.array(out["full"][1]), np.array(out["full"][2])
+    keep = alpha > 0.5
+    if not keep.any():
+        return None
+    focal = np.array([c.focal for c in bank.cams])[np.array(view)]
+    o, d = np.array(o).T[keep], np.array(d).T[keep]
+    z = depth[keep]
+    footprint = z / focal[keep] * cfg.pixels_per_voxel  # world width of a pixel (times the factor) there
+    x = o + z[:, None] * d
+    scale = scene_scale(space, x, d)
+    voxel = np.percentile(footprint * scale, 25)
+    extent = float(np.max(state.hi - state.lo))
+    return int(np.clip(16 * np.ceil((extent / voxel + 1) / 16), 32, cfg.max_resolution))
+
+
+def scene_scale(space, x, d):
+    """Scene-space length of a unit world length at world points ``x`` across the viewing directions
+    ``d`` (NumPy (n, 3)): the mean over two directions perpendicular to d."""
+    if space.is_world:
+        return np.ones(len(x))
+    a = np.cross(d, np.where(np.abs(d[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = np.cross(d, a)
+    eps = 1e-3 * np.linalg.norm(x, axis=1, keepdims=True) + 1e-6
+    out = 0.0
+    for t in (a, b):
+        out = out + np.linalg.norm(space.from_world_np(x + eps * t) - space.from_world_np(x - eps * t), axis=1) / (
+            2 * eps[:, 0])
+    return out / 2
+
+
+def stages(cfg, coarse, final):
+    """[(fraction of the steps where the stage starts, resolution), ...]: ``coarse``, then ``final`` halved
+    as often as stays well above ``coarse``, doubling up to ``final``, at most ``stages`` stages, starting
+    at 0 and at the last of ``stage_starts`` (the last stage always at the last fraction)."""
+    levels = [max(final, coarse)]
+    while levels[0] // 2 >= 1.4 * coarse:
+        levels.insert(0, levels[0] // 2)
+    if levels[0] > coarse:
+        levels.insert(0, coarse)
+    if len(levels) > cfg.stages:  # too many doublings: keep the coarse stage and the finest ones
+        levels = [coarse] + levels[len(levels) - cfg.stages + 1:]
+    fractions = [float(f) for f in cfg.stage_starts]
+    while len(fractions) < len(levels) - 1:  # more stages than fractions: halve the first gap
+        fractions.insert(0, fractions[0] / 2)
+    starts = [0.0] + (fractions[len(fractions) - len(levels) + 1:] if len(levels) > 1 else [])
+    return list(zip(starts, levels))
+
+
+def affordable_resolution(cfg, coarse, seconds_per_step, budget_seconds, pixels):
+    """The finest resolution whose last stage (its share of the budget, stage_starts[-1] to the end)
+    still passes ``min_epochs`` times over the ``pixels`` training pixels, a step at resolution R costing
+    ``seconds_per_step`` (R / coarse)^COST_EXPONENT."""
+    share = 1.0 - (cfg.stage_starts[-1] if cfg.stage_starts else 0.0)
+    steps = cfg.min_epochs * pixels / cfg.batch_rays
+    ratio = (share * budget_seconds / (steps * seconds_per_step)) ** (1.0 / COST_EXPONENT)
+    return int(max(coarse, 16 * np.floor(coarse * ratio / 16)))
+
+
+def steps_for(plan_stages, seconds_per_step, budget_seconds):
+    """Steps whose cost fills ``budget_seconds``, a step at resolution R costing
+    ``seconds_per_step`` (R / R_coarse)^COST_EXPONENT."""
+    coarse = plan_stages[0][1]
+    shares = np.diff([f for f, _ in plan_stages] + [1.0])
+    cost = sum(share * (level / coarse) ** COST_EXPONENT for share, (_, level) in zip(shares, plan_stages))
+    return int(budget_seconds / (seconds_per_step * cost))
+
+
+def schedule_of(plan_stages, steps, first):
+    """[[step, resolution], ...] of the stages over ``steps`` steps, the second stage starting after
+    step ``first`` at the earliest, starts strictly increasing."""
+    out = [[0, plan_stages[0][1]]]
+    for fraction, level in plan_stages[1:]:
+        out.append([max(int(round(fraction * steps)), first + 1, out[-1][0] + 1), level])
+    return out
+
+
+def resolution_at(schedule, step):
+    """The resolution ``schedule`` sets for ``step``."""
+    res = schedule[0][1]
+    for start, r in schedule:
+        if step >= start:
+            res = r
+    return res
+
+
+def coarse_resolution(cfg):
+    return cfg.resolution_schedule[0][1] if cfg.resolution_schedule else cfg.coarse_resolution
+
+
+def finest_resolution(cfg):
+    """The resolution whose voxel is the unit of raw densities: the explicit schedule's last, else the cap."""
+    return cfg.resolution_schedule[-1][1] if cfg.resolution_schedule else cfg.max_resolution
