@@ -17,6 +17,7 @@ import numpy as np
 
 BYTES_FORWARD = 8 * 4 * 4
 BYTES_TRAIN = 3 * BYTES_FORWARD + 2 * 16
+BYTES_TABLE = 8 * 4  # a brick grid's lookup reads the brick table at each corner
 
 
 def describe():

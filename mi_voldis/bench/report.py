@@ -3,7 +3,7 @@ import os
 import shutil
 
 from . import rays
-from .machine import BYTES_FORWARD, BYTES_TRAIN
+from .machine import BYTES_FORWARD, BYTES_TABLE, BYTES_TRAIN
 from .run import msps_bound, time_to_within
 
 
@@ -25,36 +25,41 @@ def write(results, report_dir, command):
     md += _speed_error(results, report_dir)
     md += _content(results)
     md += _accuracy(results, report_dir)
-    md += _memory(results)
     with open(os.path.join(report_dir, "bench.md"), "w") as f:
         f.write("\n".join(md) + "\n")
 
 
 def _throughput(results):
-    bw = results["bandwidth"]
-    fwd_bound, train_bound = msps_bound(bw["drjit_gbs"], BYTES_FORWARD), msps_bound(bw["drjit_gbs"], BYTES_TRAIN)
+    bw = results["bandwidth"]["drjit_gbs"]
     tile = rays.TILE
-    md = ["## 1. Ray-marcher throughput (density + RGB grid)", "",
-          f"Memory bandwidth (large copy): {bw['drjit_gbs']:.1f} GB/s with Dr.Jit on all cores, "
-          f"{bw['numpy_gbs']:.1f} GB/s with NumPy on one. A sample touches {BYTES_FORWARD} B forward "
-          f"(8 corners x 4 floats) and {BYTES_TRAIN} B in training (lookup, gradient read-modify-write, and the "
-          f"16-byte record of the lookup written and read back): bounds of {fwd_bound:.0f} and {train_bound:.0f} "
-          "Msps. These count bytes as if streamed; the lookups and scatters are scattered 16-byte accesses.", "",
-          "Rays (`mi_voldis/bench/rays.py`): *random* rays, each independent of its neighbours, and *tiles*, "
-          f"coherent rays: {tile} x {tile} pixel tiles of random views, whose rays march side by side through the "
-          "same cells (as in a rendered view, or fitting with `batch_tile=4`; section 2 shows what that does to "
-          "fitting). The training step is fitting's (Adam on the packed grids). PyTorch (the same model with "
-          "`grid_sample`, `mi_voldis/bench/torch_reference.py`) runs on the same rays in the rows with 128 samples "
-          "per ray (its steps take seconds; all rows would not fit the hour).", "",
-          "| grid | samples/ray | batch | rays | voldis fwd Msps | voldis train Msps | % of bound | torch fwd Msps | "
-          "torch train Msps | train ratio |", "|---|---|---|---|---|---|---|---|---|---|"]
+    bytes_b = {"forward": BYTES_FORWARD + BYTES_TABLE, "train": BYTES_TRAIN + 2 * BYTES_TABLE}
+    bytes_d = {"forward": BYTES_FORWARD, "train": BYTES_TRAIN}
+    md = ["## 1. Ray-marcher throughput: brick grid, dense grid, PyTorch", "",
+          f"Memory bandwidth (large copy): {bw:.1f} GB/s with Dr.Jit on all cores, "
+          f"{results['bandwidth']['numpy_gbs']:.1f} GB/s with NumPy on one. A dense sample touches "
+          f"{BYTES_FORWARD} B forward (8 corners x 4 floats) and {BYTES_TRAIN} B in training (lookup, gradient "
+          "read-modify-write, and the 16-byte record of the lookup written and read back); a brick sample adds "
+          f"the 8 table reads ({BYTES_TABLE} B) to the lookup and to the gradient scatter: {bytes_b['forward']} B "
+          f"and {bytes_b['train']} B. '% of bound' is the training rate over bandwidth / bytes per sample "
+          "(bytes counted as if streamed; the lookups and scatters are scattered 16-byte accesses).", "",
+          "Every row holds the same random field (raw density normal(-1, 1)) as a brick grid with every brick "
+          "allocated (`voldis`, what fitting uses), as a dense grid (`dense`), and in PyTorch "
+          "(`mi_voldis/bench/torch_reference.py`: the same brick grid, table lookups and trilinear weights in "
+          "tensor code, autograd, `torch.optim.Adam`); the three run in alternating blocks of steps. The "
+          "training step is fitting's: forward, backward, Adam on the packed grid. Rays "
+          f"(`mi_voldis/bench/rays.py`): *random* rays, and *tiles* of {tile} x {tile} pixels of random views.",
+          "", "| grid | samples/ray | batch | rays | bricks fwd Msps | bricks train Msps | % of bound | dense train "
+          "Msps | dense % of bound | torch train Msps | bricks / torch |",
+          "|---|---|---|---|---|---|---|---|---|---|---|"]
     for row in results["throughput"]:
-        v, t = row["voldis"], row.get("torch")
+        v, d, t = row["voldis"], row.get("voldis_dense"), row.get("torch")
         ratio = v["train"]["msps"] / t["train"]["msps"] if t else None
+        bound_b, bound_d = msps_bound(bw, bytes_b["train"]), msps_bound(bw, bytes_d["train"])
         md.append(f"| {row['resolution']}^3 | {row['samples']} | {row['batch']} | {row.get('rays', 'random')} | "
-                  f"{v['forward']['msps']:.1f} | "
-                  f"{v['train']['msps']:.1f} | {100 * v['train']['msps'] / train_bound:.0f}% | "
-                  f"{_f(t and t['forward']['msps'])} | {_f(t and t['train']['msps'], 2)} | {_f(ratio)}x |")
+                  f"{v['forward']['msps']:.1f} | {v['train']['msps']:.1f} | "
+                  f"{100 * v['train']['msps'] / bound_b:.0f}% | {_f(d and d['train']['msps'])} | "
+                  f"{_f(d and 100 * d['train']['msps'] / bound_d, 0)}% | {_f(t and t['train']['msps'], 2)} | "
+                  f"{_f(ratio)}x |")
     return md + [""]
 
 
@@ -73,16 +78,31 @@ def _speed_error(results, report_dir):
     fig.tight_layout()
     fig.savefig(os.path.join(report_dir, "speed_vs_error.png"), dpi=110)
     plt.close(fig)
-    md = ["## 2. Speed against error (fitting)", "", "![speed vs error](speed_vs_error.png)", "",
-          "| run | held-out PSNR | SSIM | fit s | to within 0.5 dB of best, s | evaluated samples/ray | "
-          "SH degree | grid |", "|---|---|---|---|---|---|---|---|"]
+    md = ["## 2. Speed against error (fitting)", "",
+          "Every scene with the default command (`python scripts/train.py DATASET --out RUN`, no setting): the "
+          "time budget, resolution and schedule come from the capture (`mi_voldis/fit/schedule.py`). *dense* "
+          "rows keep every brick (`carve=false`). Every 8th view held out; PSNR of the full field.", "",
+          "![speed vs error](speed_vs_error.png)", "",
+          "| run | held-out PSNR | SSIM | budget min | fit s | to within 0.5 dB of best, s | final grid (capture asks) "
+          "| bricks kept | evaluated samples/ray | peak RSS MiB | run folder MB | SH |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, f in results["fits"].items():
         m = f["metrics"]
         best = max((p for _, p in f["curve"]), default=None)
         within = time_to_within(f["curve"], best) if best else None
+        plan = (m.get("schedule") or {}).get("plan") or {}
+        bricks = m.get("bricks", {}).get("full")
+        kept = f"{100 * bricks['allocated'] / bricks['of']:.0f}%" if bricks else "-"
         md.append(f"| {name} | {m['held_out']['psnr']:.2f} | {m['held_out']['ssim']:.3f} | "
-                  f"{m['seconds']['fit']:.0f} | {_f(within, 0)} | {_f(m['evaluated_samples_per_ray'], 0)} | "
-                  f"{m['sh_degree']} | {'x'.join(map(str, m['grid']['full']))} |")
+                  f"{_f(plan.get('minutes'))} | {m['seconds']['fit']:.0f} | {_f(within, 0)} | "
+                  f"{'x'.join(map(str, m['grid']['full']))} ({plan.get('capture_resolution', '-')}) | {kept} | "
+                  f"{_f(m['evaluated_samples_per_ray'], 0)} | {_f(f['rss_mib'], 0)} | "
+                  f"{_f(f.get('folder_mib'), 0)} | {m['sh_degree']} |")
+    if results.get("offpath"):
+        md += ["", "Views off the training path (`mi_voldis/bench/offpath.py`): photo, held-out view, then that view "
+               "moved lower, closer, and lower with a 1.5x wider field of view (space no training view saw stays "
+               "empty, i.e. black):", ""]
+        md += [f"![{scene} off-path views]({png})" for scene, png in results["offpath"].items()]
     md += ["", "Commands:", ""] + [f"- {name}: `{f['command']}`" for name, f in results["fits"].items()]
     return md + [""]
 
@@ -164,12 +184,3 @@ def _copy_previews(run, report_dir, scene):
             shutil.copyfile(src, os.path.join(report_dir, name))
             out.append((label, name))
     return out
-
-
-def _memory(results):
-    md = ["## 5. Peak memory of fitting", "", "Peak resident memory of each fitting process (`VmHWM`, "
-          "recorded by the process itself in its metrics.json).", "",
-          "| run | grid | peak RSS (MiB) |", "|---|---|---|"]
-    for name, f in results["fits"].items():
-        md.append(f"| {name} | {'x'.join(map(str, f['metrics']['grid']['full']))} | {_f(f['rss_mib'], 0)} |")
-    return md + [""]

@@ -1,14 +1,13 @@
 """The benchmark: speed against error, side by side, in one process tree; writes reports/bench.md.
 
 Sections (each a function returning rows for the report):
-1. ray-marcher throughput of the voldis path and of the PyTorch grid_sample reference, same run;
-   machine bandwidth and the bound it sets;
-2. held-out PSNR against wall-clock seconds while fitting, several grid resolutions and sample
-   spacings, on a bundled scene and on fern; time to within 0.5 dB of the best;
+1. ray-marcher throughput of the brick grid, the dense grid and a PyTorch implementation of the brick
+   grid, same run; machine bandwidth, bytes per sample and the bound they set;
+2. held-out PSNR against wall-clock seconds of the default command on every bundled scene and real
+   capture (and the dense grid beside it on some); evaluated samples per ray, run-folder size;
 3. cost against scene content (small / large box, occupancy on / off);
 4. accuracy against ground truth on the bundled scenes (removal vs OpenCV, moved object per
-   composition rule, foreground coverage), and every task on the real statue capture;
-5. peak memory (RSS) of each fit.
+   composition rule, foreground coverage), and every task on the real statue capture.
 Fits and tasks run as child processes (scripts/train.py, scripts/optimize.py), which also gives
 their peak RSS.
 """
@@ -36,45 +35,53 @@ def child(args, log_file=None):
 
 
 # ------------------------------------------------------------------------------------ 1. throughput
+# (grid vertices per side, samples per ray, rays per batch); every row runs the brick grid (every brick
+# allocated), the dense grid and PyTorch's brick grid side by side
+THROUGHPUT_ROWS = [(128, 128, 16384), (256, 128, 16384), (128, 64, 16384), (128, 256, 16384), (128, 128, 65536)]
+QUICK_THROUGHPUT_ROWS = [(64, 64, 4096)]
+
+
 def run_throughput(quick):
-    """Rows (resolution, samples, batch, ray kind): every combination on random rays, and the rows
-    with 128 samples per ray also on tiled (coherent) rays; PyTorch on the rows with 128 samples."""
-    sizes = [(128, 128, 16384)] if quick else [(r, n, b) for r in (64, 128, 256) for n in (64, 128, 256)
-                                               for b in (4096, 16384, 65536)]
+    """Rows of THROUGHPUT_ROWS on random rays, the first also on tiled (coherent) rays: voldis bricks,
+    voldis dense and the PyTorch reference of the brick grid, in alternating blocks of steps."""
+    sizes = QUICK_THROUGHPUT_ROWS if quick else THROUGHPUT_ROWS
     try:
         from . import torch_reference
     except ImportError:
         torch_reference = None
     rows = []
-    for r, n, b in sizes:
-        for kind in rays.KINDS if n == 128 else ("random",):
+    for k, (r, n, b) in enumerate(sizes):
+        for kind in rays.KINDS if k == 0 else ("random",):
             heavy = r == 256 or b == 65536
-            impls = {"voldis": throughput.step_functions(r, n, b, rays=kind)}
-            if torch_reference is not None and n == 128:
-                impls["torch"] = torch_reference.step_functions(r, n, b, rays=kind)
-            timed = throughput.interleaved(impls, 4 if heavy else 6, {"voldis": 2, "torch": 1})
+            impls = {"voldis": throughput.step_functions(r, n, b, rays=kind, representation="bricks"),
+                     "voldis_dense": throughput.step_functions(r, n, b, rays=kind, representation="dense")}
+            if torch_reference is not None:
+                impls["torch"] = torch_reference.step_functions(r, n, b, rays=kind, representation="bricks")
+            timed = throughput.interleaved(impls, 4 if heavy else 6, {"voldis": 2, "voldis_dense": 2, "torch": 1})
             rows.append({"resolution": r, "samples": n, "batch": b, "rays": kind, **timed})
-            del impls  # free both implementations' grids before the next row
+            del impls  # free the grids before the next row
     return rows
 
 
 # ---------------------------------------------------------------------------- 2. speed vs error
-TABLETOP_CONFIGS = {  # name: --set overrides of the fitting configuration
-    "96 vox, 0.5 step": ["resolution_schedule=[[0,48],[250,72],[500,96]]"],
-    "128 vox, 0.5 step (default)": [],
-    "160 vox, 0.5 step": ["resolution_schedule=[[0,48],[250,96],[500,160]]"],
-    "128 vox, 1.0 step": ["step_voxels=1.0"],
-    "128 vox, 0.5 step, 4 x 4 ray tiles": ["batch_tile=4"],
-    "128 vox, 0.5 step, SH degree 1 (forced)": ["sh_degree=1"],
+# Every scene is fitted with the default command (no setting); "dense" rows keep every brick (carve=false,
+# today's dense grid at the same schedule) to compare the representations; the NDC row is the fixed
+# per-scene configuration fern needed before resolutions were derived from the capture.
+SCENES = ["tabletop", "room"]  # bundled (rendered by scripts/make_dataset.py)
+CAPTURES = ["fern", "horns", "statue", "garden"]  # ../shared/data; skipped when absent
+VARIANTS = {
+    "tabletop": {"dense (carve=false)": ["carve=false"]},
+    "fern": {"dense (carve=false)": ["carve=false"],
+             "dense 192 NDC, fixed schedule (before)": ["space=\"ndc\"", "carve=false", "minutes=null",
+                                                       "steps_full=1400",
+                                                       "resolution_schedule=[[0,64],[300,128],[700,192]]"]},
 }
-FERN_CONFIGS = {"192 vox (NDC), 0.5 step": ["resolution_schedule=[[0,64],[300,128],[700,192]]", "steps_full=1400",
-                                            "tighten_at_step=300"]}
-QUICK_SETS = ["steps_full=200", "steps_bg=40", "resolution_schedule=[[0,32],[80,64]]", "tighten_at_step=80",
-              "sh_degree=0"]
+QUICK_SETS = ["minutes=null", "steps_full=200", "steps_bg=40", "resolution_schedule=[[0,32],[80,64]]",
+              "sh_degree=0", "occupancy_at_step=80", "eval_every=50"]
 
 
 def fit(dataset, out, sets, log_dir):
-    args = ["scripts/train.py", dataset, "--out", out, "--quiet", "--set", "eval_every=100"]
+    args = ["scripts/train.py", dataset, "--out", out, "--quiet"]
     for s in sets:
         args += ["--set", s]
     seconds = child(args, os.path.join(log_dir, os.path.basename(out) + ".log"))
@@ -84,7 +91,11 @@ def fit(dataset, out, sets, log_dir):
         log = json.load(f)
     curve = [(r["time"], r["test_psnr"]) for r in log if "test_psnr" in r]
     return {"out": out, "wall_seconds": seconds, "rss_mib": metrics.get("peak_rss_mib"), "metrics": metrics,
-            "curve": curve, "command": "python " + " ".join(args)}
+            "curve": curve, "folder_mib": folder_bytes(out) / 2 ** 20, "command": "python " + " ".join(args)}
+
+
+def folder_bytes(path):
+    return sum(os.path.getsize(os.path.join(d, f)) for d, _, files in os.walk(path) for f in files)
 
 
 def time_to_within(curve, best, tolerance=0.5):
@@ -119,32 +130,24 @@ def run_all(quick, work, report_dir):
     results["throughput"] = run_throughput(quick)
     results["content"] = [content.measure(size, occ) for size in ((1.2, 2.4) if quick else (1.2, 3.6))
                           for occ in (False, True)]
-    tabletop = make_data("tabletop", os.path.join(work, "data", "tabletop"), logs, quick)
     fits = {}
-    configs = {"quick": QUICK_SETS} if quick else TABLETOP_CONFIGS
-    for k, (name, sets) in enumerate(configs.items()):
-        fits[f"tabletop: {name}"] = fit(tabletop, os.path.join(work, "runs", f"tabletop_{k}"), sets, logs)
-    main_run = next(iter(fits.values()))["out"] if quick else fits["tabletop: 128 vox, 0.5 step (default)"]["out"]
-    fits_scratch = fit(tabletop, os.path.join(work, "runs", "tabletop_scratch"),
-                       (QUICK_SETS if quick else []) + ["bg_strategy=\"scratch\""], logs)
-    fits["tabletop: background from scratch"] = fits_scratch
+    datasets = {scene: make_data(scene, os.path.join(work, "data", scene), logs, quick)
+                for scene in (SCENES[:1] if quick else SCENES)}
     if not quick:
-        if os.path.isdir(os.path.join(SHARED, "fern")):
-            for k, (name, sets) in enumerate(FERN_CONFIGS.items()):
-                fits[f"fern: {name}"] = fit(os.path.join(SHARED, "fern"), os.path.join(work, "runs", f"fern_{k}"),
-                                            sets, logs)
-        room = make_data("room", os.path.join(work, "data", "room"), logs, quick)
-        fits["room: default"] = fit(room, os.path.join(work, "runs", "room"), [], logs)
-        statue = os.path.join(SHARED, "statue")
-        if os.path.isdir(statue):
-            fits["statue: default"] = fit(statue, os.path.join(work, "runs", "statue"), [], logs)
+        datasets.update({c: os.path.join(SHARED, c) for c in CAPTURES if os.path.isdir(os.path.join(SHARED, c))})
+    for scene, path in datasets.items():
+        configs = {"default": QUICK_SETS if quick else []}
+        if not quick:
+            configs.update(VARIANTS.get(scene, {}))
+        for k, (name, sets) in enumerate(configs.items()):
+            fits[f"{scene}: {name}"] = fit(path, os.path.join(work, "runs", f"{scene}_{k}"), sets, logs)
     results["fits"] = fits
+    os.makedirs(report_dir, exist_ok=True)
+    from .offpath import offpath_sheet
+    results["offpath"] = {scene: os.path.basename(offpath_sheet(fits[f"{scene}: default"]["out"], path, os.path.join(
+        report_dir, f"{scene}_offpath.png"))) for scene, path in datasets.items()}
     tasks = {}
-    runs = {"tabletop": main_run}
-    if not quick:
-        runs["room"] = fits["room: default"]["out"]
-        if "statue: default" in fits:
-            runs["statue"] = fits["statue: default"]["out"]
+    runs = {scene: fits[f"{scene}: default"]["out"] for scene in ("tabletop", "statue") if f"{scene}: default" in fits}
     for scene, run in runs.items():
         steps = ["--steps", "60"] if quick else []
         tasks[scene] = {

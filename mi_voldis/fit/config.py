@@ -118,6 +118,8 @@ class FitConfig(Settings):
     carve_weight: float = setting(1e-2, "at each resolution step bricks are kept where some training ray gives a "
                                         "sample this much weight (where rays end; grown by a brick)", above=0,
                                   high=1)
+    carve: bool = setting(True, "carve bricks where no training ray ends (false: keep every brick, i.e. a dense "
+                                "grid, for comparison)")
     carve_rays: int = setting(1 << 20, "training rays traced to find where rays end (all pixels when fewer)", low=1)
     occupancy_at_step: int = setting(250, "empty-space skipping starts at this step (0: never)", low=0)
     occupancy_voxels: int = setting(4, "occupancy cells are this many voxels of the current grid across", low=1)

@@ -63,6 +63,9 @@ def refine(inputs, state, integrator, roles, resolution):
     vertices along the box's longest side."""
     for r in roles:
         f = state.fields[r]
+        if not inputs.cfg.carve:
+            state.fields[r] = resample(f, shape_for(state.lo, state.hi, resolution))
+            continue
         weights = ray_weights(inputs, integrator, r)
         needed = weights > inputs.cfg.carve_weight
         if not needed.any():  # a field still nearly transparent everywhere: keep its strongest bricks

@@ -64,6 +64,7 @@ def write_run(stage, inputs, state, fit_seconds):
         "grid": {r: list(s.shape) for r, s in state.fields.items()},
         "bricks": {r: {"allocated": s.layout.allocated, "of": int(s.layout.table.size),
                        "vertices": s.layout.allocated * s.layout.vertices_per_brick} for r, s in state.fields.items()},
+        "schedule": {"plan": state.plan, "steps_full": state.steps_full, "stages": state.schedule},
         "space": inputs.space.kind,
         "sh_degree": state.fields["full"].sh_degree, "sh_choice": state.sh_choice,
         "box": {"kind": inputs.box.kind, "lo": state.lo.tolist(), "hi": state.hi.tolist()},

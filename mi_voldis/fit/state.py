@@ -21,7 +21,8 @@ class FitState:
     scene-space points of the object's visual hull (kept occupied while the background is refitted);
     ``log``: one row per step; ``phase_times``: seconds per phase; ``sh_choice``: the trial fits that
     chose the spherical-harmonic degree; ``empty_color_fraction``: background vertices whose colour was
-    cleared; ``schedule``, ``steps_full``: the full phase's plan (:mod:`mi_voldis.fit.schedule`)."""
+    cleared; ``schedule``, ``steps_full``: the full phase's plan (:mod:`mi_voldis.fit.schedule`) and
+    ``plan``: what it was planned from (time budget, resolutions the capture asks for and affords)."""
     lo: np.ndarray
     hi: np.ndarray
     adam: Adam
@@ -37,9 +38,10 @@ class FitState:
     exposure: object = None  # per training image colour corrections (mi_voldis.exposure), or None
     schedule: list | None = None  # [[step, resolution], ...] of the full phase, once planned
     steps_full: int | None = None  # its steps, once planned
+    plan: dict | None = None  # minutes, capture / affordable / final resolution, seconds per coarse step
 
     META = ("phase", "step", "occupancy_on", "log", "phase_times", "sh_choice", "empty_color_fraction", "schedule",
-            "steps_full")
+            "steps_full", "plan")
 
     def save(self, path, phase, step):
         """Checkpoint at ``phase``/``step`` (atomically replaces ``path``)."""

@@ -138,14 +138,19 @@ def plan_schedule(inputs, state, integrator):
     coarse = coarse_resolution(cfg)
     final = cfg.resolution if cfg.resolution != "auto" else capture_resolution(inputs, integrator, state)
     final = final or cfg.max_resolution
+    state.plan = {"capture_resolution": int(final)}
     if cfg.steps_full is None:
         rows = [r["step_seconds"] for r in state.log if r["step"] > 20 and "test_psnr" not in r]
         seconds = float(np.median(rows))
         minutes = auto_minutes(inputs.ds) if cfg.minutes == "auto" else cfg.minutes
         spent = state.log[-1]["time"] if state.log else 0.0
         budget = minutes * 60.0 * (1.0 - RESERVED) - spent
+        state.plan.update(minutes=float(minutes), coarse_step_seconds=seconds)
         if cfg.resolution == "auto":
-            final = min(final, affordable_resolution(cfg, coarse, seconds, budget, inputs.bank.pixels))
+            state.plan["affordable_resolution"] = int(affordable_resolution(cfg, coarse, seconds, budget,
+                                                                            inputs.bank.pixels))
+            final = min(final, state.plan["affordable_resolution"])
+    state.plan["final_resolution"] = int(final)
     plan_stages = stages(cfg, coarse, final)
     if cfg.steps_full is not None:
         steps = cfg.steps_full

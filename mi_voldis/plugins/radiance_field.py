@@ -270,9 +270,24 @@ class RadianceField(mi.Medium):
                     logits[ch] = dr.fma(scale, v[1 + 3 * k + ch], logits[ch])
         return sigma, mi.Color3f(sigmoid(logits[0]), sigmoid(logits[1]), sigmoid(logits[2]))
 
+    # ------------------------------------------------ Mitsuba's path tracers: an empty medium
+    # The field emits and absorbs; it does not scatter, so it is evaluated by the ``voldis`` integrator
+    # only. Dr.Jit traces a virtual call through every live instance of a domain, so Mitsuba's
+    # ``volpath`` traces these methods whenever a field exists in the process, even for scenes that do
+    # not hold one: they answer "nothing here" instead of failing.
+    def intersect_aabb(self, ray):
+        return mi.Bool(False), mi.Float(dr.inf), mi.Float(dr.inf)
+
+    def get_majorant(self, mei, active=True):
+        return mi.Color3f(0.0)
+
+    def get_scattering_coefficients(self, mei, active=True):
+        return mi.Color3f(0.0), mi.Color3f(0.0), mi.Color3f(0.0)
+
     def sample_interaction(self, ray, sample, channel, active):
-        raise RuntimeError("radiance_field is evaluated by the 'voldis' integrator only; "
-                           "it does not scatter light for Mitsuba's path tracers")
+        mei = dr.zeros(mi.MediumInteraction3f, dr.width(sample))
+        mei.t = mi.Float(dr.inf)
+        return mei
 
 
 def _load_grid(props, key, name):
