@@ -47,3 +47,17 @@ def save_any_field(folder, role, field):
     packed = field.data if hasattr(field, "data") and not hasattr(field, "packed") else field.packed
     values = np.array(packed).reshape(-1, field.width)[layout.vertices_per_brick:, :field.channels]
     return save_grid(folder, role, layout, values, field.to_world, field.density_scale)
+
+
+def load_scene(path, need_fields=True):
+    """``mi.load_file(path)`` with errors as one ``ValueError`` naming the file (Mitsuba's XML and plugin
+    errors span lines); ``need_fields``: the scene's integrator must be a ``voldis`` with its fields."""
+    if not os.path.isfile(path):
+        raise ValueError(f"{path}: no such scene file")
+    try:
+        scene = mi.load_file(path)
+    except Exception as e:  # noqa: BLE001  (Mitsuba raises RuntimeError for XML, ValueError from plugins)
+        raise ValueError(str(e) if path in str(e) else f"{path}: {e}") from None
+    if need_fields and not getattr(scene.integrator(), "fields", None):
+        raise ValueError(f"{path}: its integrator is not a 'voldis' integrator with radiance fields")
+    return scene

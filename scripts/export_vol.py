@@ -13,6 +13,8 @@ import argparse
 import os
 import sys
 
+from _boundary import add_debug, positive, run
+
 
 def numbers(text, count, flag, kind=float):
     try:
@@ -31,35 +33,28 @@ def main(argv=None):
     ap.add_argument("--out", required=True, help="output directory")
     ap.add_argument("--field", default="full", help="which field: full or bg (default: full)")
     ap.add_argument("--region", type=lambda t: numbers(t, (6,), "region"), help="world box x0,y0,z0,x1,y1,z1")
-    ap.add_argument("--resolution", type=lambda t: numbers(t, (1, 3), "resolution", int),
+    ap.add_argument("--resolution", type=lambda t: [positive(v) for v in numbers(t, (1, 3), "resolution", str)],
                     help="values along the longest side (N) or per axis (NX,NY,NZ); default 128")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant (default: llvm_ad_rgb)")
+    add_debug(ap)
     args = ap.parse_args(argv)
     os.environ["MI_VOLDIS_VARIANT"] = args.variant  # chosen before the first import of mi_voldis
-    import mitsuba as mi
     import numpy as np
 
-    import mi_voldis  # noqa: F401  (registers the plugins)
     from mi_voldis.dense_export import export_dense, write_export
+    from mi_voldis.scene import load_scene
 
-    if not os.path.isfile(args.scene):
-        sys.exit(f"error: {args.scene}: no such scene file")
-    try:
-        integrator = mi.load_file(args.scene).integrator()
-    except Exception as e:  # Mitsuba reports XML and plugin errors as RuntimeError with the file's name
-        sys.exit(f"error: {args.scene}: {str(e).splitlines()[0]}")
-    fields = getattr(integrator, "fields", None)
-    if not fields:
-        sys.exit(f"error: {args.scene}: no voldis integrator with radiance fields")
+    integrator = load_scene(args.scene).integrator()
+    fields = integrator.fields
     if args.field not in fields:
-        sys.exit(f"error: {args.scene}: no field '{args.field}' (it has {', '.join(sorted(fields))})")
+        raise ValueError(f"{args.scene}: no field '{args.field}' (it has {', '.join(sorted(fields))})")
     field, space = fields[args.field], integrator.space
     if args.region is not None:
         lo, hi = np.array(args.region[:3]), np.array(args.region[3:])
         if not np.all(hi > lo):
-            sys.exit(f"error: --region needs x0 < x1, y0 < y1, z0 < z1, got {args.region}")
+            raise ValueError(f"--region needs x0 < x1, y0 < y1, z0 < z1, got {args.region}")
     elif space.kind == "ndc":
-        sys.exit(f"error: {args.scene}: the fields live in NDC space, which has no finite world box: give --region")
+        raise ValueError(f"{args.scene}: the fields live in NDC space, which has no finite world box: give --region")
     else:
         corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], np.float64)
         if space.is_curved:  # the inner cube of the contraction
@@ -73,11 +68,9 @@ def main(argv=None):
         resolution = [max(1, int(round(n * s / size.max()))) for s in size]
     else:
         resolution = args.resolution
-    if min(resolution) < 1:
-        sys.exit(f"error: --resolution must be positive, got {args.resolution}")
     sigma, albedo = export_dense(field, space, lo, hi, resolution)
     print(write_export(args.out, args.field, sigma, albedo, lo, hi, source=os.path.abspath(args.scene)))
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run(main))

@@ -8,18 +8,25 @@ import argparse
 import os
 import sys
 
+from _boundary import add_debug, positive, run
+
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scene", help="Mitsuba XML scene whose object shapes have ids starting with 'object'")
     ap.add_argument("--out", required=True, help="output dataset folder (replaced when complete)")
-    ap.add_argument("--views", type=int, help="number of views")
+    ap.add_argument("--views", type=positive, help="number of views")
     ap.add_argument("--res", help="resolution WxH, e.g. 160x120")
-    ap.add_argument("--spp", type=int, help="path-tracing samples per pixel")
+    ap.add_argument("--spp", type=positive, help="path-tracing samples per pixel")
     ap.add_argument("--seed", type=int, default=0, help="random seed (the output is deterministic for it)")
     ap.add_argument("--holdout", type=int, default=8, help="every k-th view is a test view")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
+    add_debug(ap)
     args = ap.parse_args(argv)
+    if args.holdout < 0 or args.holdout == 1:
+        ap.error(f"--holdout must be 0 (no test views) or k >= 2 (every k-th view a test view), got {args.holdout}")
+    if args.views is not None and args.views < 2:
+        ap.error(f"--views must be at least 2, got {args.views}")
     resolution = None
     if args.res:
         try:
@@ -28,15 +35,11 @@ def main(argv=None):
         except (ValueError, AssertionError):
             ap.error(f"--res must look like 160x120, got '{args.res}'")
     if not os.path.isfile(args.scene):
-        sys.exit(f"error: {args.scene}: no such scene file")
+        raise ValueError(f"{args.scene}: no such scene file")
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
     from mi_voldis.synth.make import make_dataset
-    try:
-        out = make_dataset(args.scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout)
-    except ValueError as e:
-        sys.exit(f"error: {e}")
-    print(out)
+    print(make_dataset(args.scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout))
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run(main))

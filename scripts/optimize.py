@@ -14,6 +14,8 @@ import json
 import os
 import sys
 
+from _boundary import add_debug, run
+
 # shorthand flags: flag -> (setting, how to read its text)
 FLAGS = {"steps": ("steps", int), "checkpoint_every": ("checkpoint_every", int), "seed": ("seed", int),
          "composition": ("composition", str), "scale": ("scale", float), "rotate": ("rotate", str),
@@ -58,37 +60,37 @@ def main(argv=None):
     ap.add_argument("--clip-model", help="semantic: local CLIP model folder")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_debug(ap)
     args = ap.parse_args(argv)
-    try:
-        values = {}
-        for flag, (name, kind) in FLAGS.items():
-            text = getattr(args, flag)
-            if text is None:
-                continue
-            try:
-                values[name] = vector(text, flag) if kind == "vector" else kind(text)
-            except ValueError:
-                raise ValueError(f"--{flag.replace('_', '-')} expects a {kind.__name__}, got '{text}'") from None
-        if args.resume:
-            values["resume"] = True
-        if args.dataset_transform:
-            values["use_dataset_transform"] = True
-        cls = SETTINGS[args.task]
-        unknown = sorted(set(values) - set(cls.names()))
-        if unknown:
-            ap.error(f"--task {args.task} takes no {', '.join('--' + u.replace('_', '-') for u in unknown)}")
-        settings = cls.from_sources(args.config, args.set, **values)
-    except ValueError as e:
-        sys.exit(f"error: {e}")
+    if not os.path.isdir(args.run):
+        raise ValueError(f"{args.run}: no such run folder (scripts/train.py writes one)")
+    values = {}
+    for flag, (name, kind) in FLAGS.items():
+        text = getattr(args, flag)
+        if text is None:
+            continue
+        if kind == "vector":
+            values[name] = vector(text, flag)
+            continue
+        try:
+            values[name] = kind(text)
+        except ValueError:
+            raise ValueError(f"--{flag.replace('_', '-')} expects a {kind.__name__}, got '{text}'") from None
+    if args.resume:
+        values["resume"] = True
+    if args.dataset_transform:
+        values["use_dataset_transform"] = True
+    cls = SETTINGS[args.task]
+    unknown = sorted(set(values) - set(cls.names()))
+    if unknown:
+        ap.error(f"--task {args.task} takes no {', '.join('--' + u.replace('_', '-') for u in unknown)}")
+    settings = cls.from_sources(args.config, args.set, **values)
     from mi_voldis.tasks import run_task
-    try:
-        out = run_task(args.run, args.task, settings, args.dataset, progress=not args.quiet)
-    except ValueError as e:
-        sys.exit(f"error: {e}")
+    out = run_task(args.run, args.task, settings, args.dataset, progress=not args.quiet)
     with open(os.path.join(out, "metrics.json")) as f:
         metrics = json.load(f)
     print(json.dumps({"output": out, **{k: v for k, v in metrics.items() if k != "per_view"}}, indent=1))
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run(main))

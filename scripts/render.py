@@ -10,42 +10,45 @@ import argparse
 import os
 import sys
 
+from _boundary import add_debug, positive, run
+
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scene", help="Mitsuba XML scene with a 'voldis' integrator")
     ap.add_argument("--out", required=True, help="output directory")
-    ap.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's)")
-    ap.add_argument("--width", type=int, help="override the films' width")
-    ap.add_argument("--height", type=int, help="override the films' height")
+    ap.add_argument("--spp", type=positive, default=None, help="samples per pixel (default: the scene's)")
+    ap.add_argument("--width", type=positive, help="override the films' width")
+    ap.add_argument("--height", type=positive, help="override the films' height")
     ap.add_argument("--cameras", help="render from this dataset's cameras instead of the scene's sensors")
     ap.add_argument("--split", default="test", choices=("train", "test", "all"), help="views of --cameras")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant (default: llvm_ad_rgb)")
+    add_debug(ap)
     args = ap.parse_args(argv)
     if (args.width is None) != (args.height is None):
         ap.error("--width and --height go together")
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        raise ValueError(f"{args.out}: exists and is not a folder")
 
     os.environ["MI_VOLDIS_VARIANT"] = args.variant  # chosen before the first import of mi_voldis
-    import mitsuba as mi
-
     from mi_voldis.export import render_scene_files
+    from mi_voldis.scene import load_scene
 
-    if not os.path.isfile(args.scene):
-        sys.exit(f"error: {args.scene}: no such scene file")
-    scene = mi.load_file(args.scene)
+    scene = load_scene(args.scene)
     size = (args.width, args.height) if args.width else None
     cameras = None
     if args.cameras:
-        from mi_voldis.data import DatasetError, load_dataset
-        try:
-            ds = load_dataset(args.cameras)
-        except DatasetError as e:
-            sys.exit(f"error: {e}")
+        from mi_voldis.data import load_dataset
+        ds = load_dataset(args.cameras)
         views = range(len(ds.cameras)) if args.split == "all" else (ds.test if args.split == "test" else ds.train)
+        if not len(views):
+            raise ValueError(f"{args.cameras}: no {args.split} views to render")
         cameras = [(os.path.splitext(ds.names[v])[0], ds.cameras[v]) for v in views]
+    elif not scene.sensors():
+        raise ValueError(f"{args.scene}: the scene has no sensor; give --cameras DATASET")
     for path in render_scene_files(scene, args.out, spp=args.spp, size=size, cameras=cameras):
         print(path)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run(main))

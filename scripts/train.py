@@ -10,6 +10,8 @@ import json
 import os
 import sys
 
+from _boundary import add_debug, run
+
 
 def main(argv=None):
     pre = argparse.ArgumentParser(add_help=False)
@@ -27,16 +29,15 @@ def main(argv=None):
     ap.add_argument("--holdout", type=int, default=8, help="every k-th view is held out (without a split)")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_debug(ap)
     args = ap.parse_args(argv)
-    from mi_voldis.data import DatasetError
+    if args.holdout < 0:
+        ap.error(f"--holdout must be 0 (no test views) or a positive k, got {args.holdout}")
     from mi_voldis.fit.run import run_fit
-    try:
-        cfg = FitConfig.from_sources(args.config, args.set)
-        metrics = run_fit(args.dataset, args.out, cfg, args.resume, not args.quiet, args.format, args.holdout)
-    except (DatasetError, ValueError) as e:
-        sys.exit(f"error: {e}")
+    cfg = FitConfig.from_sources(args.config, args.set)
+    metrics = run_fit(args.dataset, args.out, cfg, args.resume, not args.quiet, args.format, args.holdout)
     print(json.dumps({"run": args.out, **metrics["held_out"], "seconds": metrics["seconds"]}, indent=1))
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run(main))

@@ -78,14 +78,16 @@ def check_gradient(params, key, loss, n_entries=4, eps=3e-3, rtol=0.02, seed=0):
     return grad
 
 
-def kill_after_checkpoint(proc, checkpoint, step, timeout=120):
-    """SIGKILL ``proc`` once its ``checkpoint`` (.npz with a JSON ``__meta__``) has reached ``step``."""
+def kill_after_checkpoint(proc, checkpoint, step, timeout=120, phase=None):
+    """SIGKILL ``proc`` once its ``checkpoint`` (.npz with a JSON ``__meta__``) has reached ``step`` (of
+    ``phase``, when given)."""
     deadline = time.time() + timeout
     while time.time() < deadline and proc.poll() is None:
         if os.path.exists(checkpoint):
             try:
                 with np.load(checkpoint) as f:
-                    reached = json.loads(bytes(f["__meta__"]).decode())["step"]
+                    meta = json.loads(bytes(f["__meta__"]).decode())
+                reached = meta["step"] if phase is None or meta["phase"] == phase else 0
             except (OSError, ValueError, KeyError):  # caught while being replaced: look again
                 reached = 0
             if reached >= step:

@@ -85,13 +85,18 @@ def _intrinsics(meta, path, width, height):
         if abs(fx - fy) > 1e-3 * fx:
             raise DatasetError(f"{path}: fl_x = {fx} and fl_y = {fy} differ; non-square pixels are not supported")
     if "camera_angle_x" in meta:
-        fa = 0.5 * width / np.tan(0.5 * float(meta["camera_angle_x"]))
+        angle = float(meta["camera_angle_x"])
+        if not 0 < angle < np.pi:
+            raise DatasetError(f"{path}: camera_angle_x must be in (0, pi) radians, got {angle}")
+        fa = 0.5 * width / np.tan(0.5 * angle)
         if fx is not None and abs(fa - fx) > 1e-3 * fx:
             raise DatasetError(f"{path}: camera_angle_x gives a focal length of {fa:.3f} px but fl_x is "
                                f"{fx:.3f}; the intrinsics are ambiguous")
         fx = fa
     if fx is None:
         raise DatasetError(f"{path}: no intrinsics (camera_angle_x or fl_x)")
+    if not (np.isfinite(fx) and fx > 0):
+        raise DatasetError(f"{path}: the focal length must be a positive number of pixels, got {fx}")
     return fx, float(meta.get("cx", 0.5 * width)), float(meta.get("cy", 0.5 * height))
 
 

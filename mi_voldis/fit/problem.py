@@ -43,10 +43,13 @@ class FieldFit:
         cfg = inputs.cfg
         self.rates = (cfg.lr_density, cfg.lr_color) if rates is None else rates  # (density, colour)
         self.neighbours = {}
-        self.rebuild()
+        self.rebuild(resume=True)
 
     # -- plumbing
-    def rebuild(self):
+    def rebuild(self, resume=False):
+        """The integrator and parameters over the state's fields. Skipping uses a fresh occupancy grid,
+        or with ``resume`` the one this phase built last (a phase resumed from a checkpoint then skips
+        exactly what it skipped before the checkpoint)."""
         self.integrator = fit_integrator(self.inputs, self.state)
         self.params = PackedParameters({r: self.integrator.fields[r] for r in self.roles})
         for r in self.roles:
@@ -56,13 +59,16 @@ class FieldFit:
             self.adam.lrs["exposure"] = self.inputs.cfg.exposure_lr
         self.keys = list(self.params)
         self.neighbours = {}  # per role, made when the TV first needs them
-        if self.state.occupancy_on:
+        if resume and self.state.occupancy is not None and self.state.occupancy_phase == self.phase:
+            self.integrator.use_occupancy(self.state.occupancy)
+        elif self.state.occupancy_on:
             self.update_occupancy()
 
     def update_occupancy(self):
         extra = self.state.hull_points if self.hull is not None else None
-        self.integrator.update_occupancy(occupancy_resolution(self.inputs.cfg, self.state),
-                                         occupancy_sigma(self.inputs.cfg, self.state), extra)
+        self.state.occupancy = self.integrator.update_occupancy(occupancy_resolution(self.inputs.cfg, self.state),
+                                                                occupancy_sigma(self.inputs.cfg, self.state), extra)
+        self.state.occupancy_phase = self.phase
 
     def sync_states(self):
         """Copy the optimised values back into the fit state's fields (and colour corrections)."""

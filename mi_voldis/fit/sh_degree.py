@@ -20,6 +20,11 @@ def choose_sh_degree(inputs, state, roles):
     cfg, ds = inputs.cfg, inputs.ds
     train = np.asarray(ds.train)
     val, fit = train[::4], np.setdiff1d(train, train[::4])
+    if len(fit) == 0:  # one training view: nothing to validate view dependence on
+        for r in roles:
+            state.fields[r] = with_sh_degree(state.fields[r], 0)
+        state.sh_choice = {"degree": 0, "reason": "a single training view: no view to validate degree 1 on"}
+        return 0
     fit_bank = RayBank(ds, fit)
     kept = {r: state.fields[r] for r in roles}
     scores = {}

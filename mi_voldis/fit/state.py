@@ -10,6 +10,7 @@ from ..device import from_numpy
 from ..field_state import FieldState
 from ..io.run_folder import Checkpoint
 from ..optim.adam import Adam
+from ..render.occupancy import Occupancy
 
 
 @dataclass
@@ -39,9 +40,11 @@ class FitState:
     schedule: list | None = None  # [[step, resolution], ...] of the full phase, once planned
     steps_full: int | None = None  # its steps, once planned
     plan: dict | None = None  # minutes, capture / affordable / final resolution, seconds per coarse step
+    occupancy: object = None  # the skipping grid in use (mi_voldis.render.occupancy.Occupancy), or None
+    occupancy_phase: int | None = None  # the phase that built it: a resumed phase takes it back unchanged
 
     META = ("phase", "step", "occupancy_on", "log", "phase_times", "sh_choice", "empty_color_fraction", "schedule",
-            "steps_full", "plan")
+            "steps_full", "plan", "occupancy_phase")
 
     def save(self, path, phase, step):
         """Checkpoint at ``phase``/``step`` (atomically replaces ``path``)."""
@@ -63,6 +66,10 @@ class FitState:
             arrays["hull_points"] = self.hull_points
         if self.exposure is not None:
             arrays["exposure"] = np.array(self.exposure)
+        if self.occupancy is not None:
+            o = self.occupancy
+            arrays.update({"occupancy/cells": o.cells, "occupancy/lo": o.lo, "occupancy/hi": o.hi,
+                           "occupancy/reach": np.array(o.reach)})
         Checkpoint(path).save(arrays, meta)
 
     @classmethod
@@ -81,5 +88,7 @@ class FitState:
                                        arrays[f"{r}/to_world"], float(arrays[f"{r}/density_scale"]))
         adam.load({k[5:]: v for k, v in arrays.items() if k.startswith("adam/")}, meta["adam_t"])
         exposure = from_numpy(mi.Float, arrays["exposure"]) if "exposure" in arrays else None
+        occupancy = Occupancy(arrays["occupancy/lo"], arrays["occupancy/hi"], arrays["occupancy/cells"],
+                              float(arrays["occupancy/reach"])) if "occupancy/cells" in arrays else None
         return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields, hull_points=arrays.get("hull_points"),
-                   exposure=exposure, **{key: meta[key] for key in cls.META})
+                   exposure=exposure, occupancy=occupancy, **{key: meta.get(key) for key in cls.META})

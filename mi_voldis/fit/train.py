@@ -65,7 +65,12 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
         init_fields(inputs, state, roles, 0 if cfg.sh_degree in ("auto", 0) else int(cfg.sh_degree))
 
     def checkpoint_at(phase):
-        return lambda step: state.save(checkpoint, phase, step)
+        def saver(problem):
+            def save(step):
+                problem.sync_states()  # the optimised values live in the problem's integrator until synced
+                state.save(checkpoint, phase, step)
+            return save
+        return saver
 
     if state.phase == "full":
         fit_full(inputs, state, roles, scratch, checkpoint_at("full"))
@@ -82,7 +87,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
         problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
                            schedule=False)
         optimize(problem, state.adam, steps=cfg.steps_bg, start=state.step, final_ratio=cfg.lr_final_ratio,
-                 log=state.log, desc="bg refit", checkpoint=checkpoint_at("bg"),
+                 log=state.log, desc="bg refit", checkpoint=checkpoint_at("bg")(problem),
                  checkpoint_every=cfg.checkpoint_every, progress=progress)
         problem.sync_states()
         state.phase_times["bg"] = state.phase_times.get("bg", 0.0) + time.perf_counter() - t0
@@ -99,7 +104,8 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
     """The full-scene phase (with the background too for ``scratch``), from ``state.step``: the coarse
     stage's first ``calibration_steps`` at a constant learning rate when the schedule is still to be
     planned (:mod:`mi_voldis.fit.schedule`), then the planned stages with a decaying rate; with
-    ``sh_degree`` 'auto' the degree is chosen once the coarse geometry stands (the first refinement)."""
+    ``sh_degree`` 'auto' the degree is chosen once the coarse geometry stands (the first refinement).
+    ``checkpoint(problem)``: the function that saves a step of ``problem``."""
     cfg = inputs.cfg
     t0 = time.perf_counter()
     if state.schedule is None and cfg.resolution_schedule and cfg.steps_full:
@@ -108,7 +114,7 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
         state.schedule = [[0, coarse_resolution(cfg)]]  # the coarse stage, until planned
     problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True)
     eval_fn = held_out_psnr(inputs, problem)
-    common = dict(log=state.log, checkpoint=checkpoint, checkpoint_every=cfg.checkpoint_every, eval_fn=eval_fn,
+    common = dict(log=state.log, checkpoint=checkpoint(problem), checkpoint_every=cfg.checkpoint_every, eval_fn=eval_fn,
                   eval_every=cfg.eval_every, progress=inputs.progress)
     if state.steps_full is None:
         optimize(problem, state.adam, steps=cfg.calibration_steps, start=state.step, final_ratio=1.0,

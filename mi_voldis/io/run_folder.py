@@ -17,18 +17,54 @@ def staging(out):
     return out.rstrip("/") + ".partial"
 
 
+MIN_FREE_BYTES = 256 << 20  # refuse to start a job with less free disk than this beside OUT
+
+
+def check_output(out, resume=False, min_free=MIN_FREE_BYTES):
+    """Checks made before any work: ``out`` is a folder or does not exist yet, the folder it will be
+    made in (its nearest existing ancestor; missing parents are created) is writable with ``min_free``
+    bytes free, and (``resume``) a staged ``OUT.partial`` exists. Raises ``ValueError`` naming the path."""
+    out = out.rstrip("/") or "/"
+    for path in (out, staging(out)):
+        if os.path.exists(path) and not os.path.isdir(path):
+            raise ValueError(f"{path}: exists and is not a folder (output folders are replaced whole; move the "
+                             "file away or choose another --out)")
+    parent = os.path.dirname(os.path.abspath(out))
+    while not os.path.exists(parent):
+        parent = os.path.dirname(parent)
+    if not os.path.isdir(parent):
+        raise ValueError(f"{parent}: is a file, so {out} cannot be made")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"{parent}: not writable, so {out} cannot be made")
+    free = shutil.disk_usage(parent).free
+    if free < min_free:
+        raise ValueError(f"{parent}: only {free >> 20} MiB free on this disk; a run needs at least {min_free >> 20}")
+    if resume and not os.path.isdir(staging(out)):
+        raise ValueError(f"{staging(out)}: nothing to resume (no staged output)")
+
+
 @contextlib.contextmanager
 def staged(out, resume=False):
     """``with staged(OUT, resume) as stage:`` write everything into ``stage``; on leaving the block
-    without an exception it replaces ``OUT``. ``resume``: continue an existing ``OUT.partial``."""
+    without an exception it replaces ``OUT``. ``resume``: continue an existing ``OUT.partial``.
+    A failed job leaves ``OUT`` as it was, and its ``OUT.partial`` only if it holds a checkpoint to
+    resume from."""
+    check_output(out, resume)
     stage = staging(out)
-    if resume and not os.path.isdir(stage):
-        raise ValueError(f"{stage}: nothing to resume (no staged output)")
     if not resume:
         shutil.rmtree(stage, ignore_errors=True)
     os.makedirs(stage, exist_ok=True)
-    yield stage
+    try:
+        yield stage
+    except BaseException:
+        if not _has_checkpoint(stage):
+            shutil.rmtree(stage, ignore_errors=True)
+        raise
     commit(stage, out)
+
+
+def _has_checkpoint(stage):
+    return any(f.endswith(".npz") for _, _, files in os.walk(stage) for f in files)
 
 
 def commit(stage, out):
@@ -63,11 +99,27 @@ class Checkpoint:
 
 
 def write_json(path, data):
-    """Write ``data`` as JSON via a temporary file (never half-written)."""
+    """Write ``data`` as strict JSON via a temporary file (never half-written); NaN and infinities,
+    which JSON cannot hold, become null."""
     tmp = path + ".tmp"
     with open(tmp, "w") as f:
-        json.dump(data, f, indent=1, default=float)
+        json.dump(_finite(data), f, indent=1, allow_nan=False)
     os.replace(tmp, path)
+
+
+def _finite(x):
+    """``x`` with NumPy scalars and arrays as Python values and non-finite floats as None."""
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _finite(x.tolist())
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not np.isfinite(x):
+        return None
+    return x
 
 
 def peak_rss_mib():

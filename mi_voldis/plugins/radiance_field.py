@@ -1,6 +1,8 @@
 """The ``radiance_field`` medium plugin: a voxel-grid radiance field over a box."""
 from __future__ import annotations
 
+import zipfile
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -295,12 +297,12 @@ def _load_grid(props, key, name):
     if key not in props:
         raise ValueError(f"{name}: radiance_field needs a '{key}' property (.vol file or tensor)")
     value = props.get(key)
-    bbox = None
+    bbox, source = None, name
     if isinstance(value, str):
         path = str(mi.file_resolver().resolve(value))
         header = read_header(path)
         bbox = (header[4], header[5])
-        value = read_vol(path)
+        value, source = read_vol(path), path
     elif isinstance(value, mi.VolumeGrid):
         value = grid_values(value)
     elif not isinstance(value, mi.TensorXf):
@@ -308,7 +310,7 @@ def _load_grid(props, key, name):
                          f"got {type(value).__name__}")
     tensor = mi.TensorXf(value)
     if not dr.all(dr.isfinite(tensor.array)):
-        raise ValueError(f"{name}: '{key}' contains NaN or Inf values")
+        raise ValueError(f"{source}: '{key}' of field {name} contains NaN or Inf values")
     return tensor, bbox
 
 
@@ -327,7 +329,7 @@ def _load_bricks(props, name):
             with np.load(path) as f:
                 table, data, vertices, brick = f["table"], f["data"], f["vertices"], int(f["brick"])
                 bbox = tuple(np.asarray(f["bbox"], np.float64)) if "bbox" in f.files else None
-        except (OSError, ValueError, KeyError) as e:
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as e:
             raise ValueError(f"{path}: not a brick grid file ({e})") from None
     else:
         for key in ("table", "data", "vertices", "brick"):

@@ -183,6 +183,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             self._plans.clear()
         return self.occupancy
 
+    def use_occupancy(self, occupancy):
+        """Skip with a given :class:`Occupancy` grid (e.g. one restored from a checkpoint); None: off."""
+        self.occupancy = occupancy
+        self._plans.clear()
+
     def scene_bounds(self):
         """Scene-space axis-aligned bounds of every density-carrying box (after transforms)."""
         lookups, sources = self._lookups()

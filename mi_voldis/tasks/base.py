@@ -27,7 +27,7 @@ from ..plots import plot_log
 from ..raybank import RayBank
 from ..render.rays import render_rays
 from ..render.views import layer_channels, render_camera
-from ..scene import build_integrator, write_scene
+from ..scene import build_integrator, load_scene, write_scene
 
 PREVIEW_VIEWS = 3
 
@@ -40,8 +40,16 @@ class FittedRun:
         scene = os.path.join(run_dir, "scene.xml")
         if not os.path.isfile(scene):
             raise ValueError(f"{run_dir}: not a fitted run (no scene.xml); run scripts/train.py first")
-        with open(os.path.join(run_dir, "config.json")) as f:
-            self.config = json.load(f)
+        config = os.path.join(run_dir, "config.json")
+        try:
+            with open(config) as f:
+                self.config = json.load(f)
+        except OSError as e:
+            raise ValueError(f"{config}: cannot read the run's settings ({e.strerror})") from None
+        except ValueError as e:
+            raise ValueError(f"{config}: not valid JSON ({e})") from None
+        if not isinstance(self.config, dict):
+            raise ValueError(f"{config}: must hold a JSON object of settings")
         record = self.config.get("dataset") or {}
         record = record if isinstance(record, dict) else {"path": record}
         try:
@@ -49,7 +57,7 @@ class FittedRun:
                                         record.get("holdout", 8))
         except DatasetError as e:
             raise ValueError(f"{run_dir}: its dataset cannot be loaded ({e}); pass --dataset") from None
-        base = mi.load_file(scene).integrator()
+        base = load_scene(scene).integrator()
         self.fields = dict(base.fields)
         self.space = base.space
         self.properties = base.properties()

@@ -1,0 +1,59 @@
+"""The scripts' boundary: a mistake is one line naming the file and the problem, never a traceback.
+
+Exit codes: 0 done, 1 an error (input files, settings, output folder, or an internal error), 2 a
+usage error (argparse), 130 interrupted. ``--debug`` anywhere on the command line re-raises, showing
+the traceback. Standard library only: the scripts choose the Mitsuba variant before importing
+mi_voldis.
+"""
+import argparse
+import sys
+
+USER_ERRORS = ("ValueError", "OSError", "DatasetError", "FileNotFoundError", "PermissionError", "IsADirectoryError",
+               "NotADirectoryError")
+
+
+def one_line(error):
+    """The error's message on one line. Mitsuba's errors span several, and when a plugin written in
+    Python raised, they embed its traceback: then the plugin's own message (the last line) is the one."""
+    text = str(error)
+    if "Traceback (most recent call last):" in text:
+        last = [line for line in text.splitlines() if line.strip()][-1].strip()
+        name, _, message = last.partition(": ")
+        text = message if name.isidentifier() and message else last
+    return " ".join(text.split()) or type(error).__name__
+
+
+def run(main, argv=None):
+    """Run ``main(argv)`` and return the process's exit code."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    debug = "--debug" in argv
+    try:
+        main(argv)
+    except KeyboardInterrupt:
+        if debug:
+            raise
+        print("interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # noqa: BLE001  (the boundary: everything becomes one line)
+        if debug:
+            raise
+        kinds = {k.__name__ for k in type(e).__mro__}
+        hint = "" if kinds & set(USER_ERRORS) else f" ({type(e).__name__}; run again with --debug for the traceback)"
+        print(f"error: {one_line(e)}{hint}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def add_debug(parser):
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an error")
+
+
+def positive(text):
+    """argparse type: a whole number >= 1 (0 or less is a usage error, not "the default")."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, got '{text}'")
+    return value
