@@ -1,8 +1,12 @@
-"""Render a dataset with ground truth from a bundled Mitsuba scene.
+"""Render a dataset with ground truth from a bundled Mitsuba scene, or from a random one.
 
     python scripts/make_dataset.py scenes/NAME.xml --out data/NAME [--views N --res WxH --spp S --seed K]
+    python scripts/make_dataset.py --random SEED --out data/random_SEED [--views N --res WxH --spp S]
 
 The rig (cameras, resolution, the "moved" edit) comes from scenes/NAME.json; the flags override it.
+--random composes a scene from the seed (mi_voldis/synth/random_scene.py: layout, object parts,
+materials, a mirror sometimes, an occluder sometimes, a shadow-casting light, a 360-degree or
+forward-facing rig) and keeps it in the dataset's scene/ folder.
 """
 import argparse
 import os
@@ -13,7 +17,8 @@ from _boundary import add_debug, positive, run
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("scene", help="Mitsuba XML scene whose object shapes have ids starting with 'object'")
+    ap.add_argument("scene", nargs="?", help="Mitsuba XML scene whose object shapes have ids starting with 'object'")
+    ap.add_argument("--random", type=int, metavar="SEED", help="a random scene made from SEED instead of SCENE")
     ap.add_argument("--out", required=True, help="output dataset folder (replaced when complete)")
     ap.add_argument("--views", type=positive, help="number of views")
     ap.add_argument("--res", help="resolution WxH, e.g. 160x120")
@@ -34,11 +39,24 @@ def main(argv=None):
             assert len(resolution) == 2 and min(resolution) > 0
         except (ValueError, AssertionError):
             ap.error(f"--res must look like 160x120, got '{args.res}'")
-    if not os.path.isfile(args.scene):
+    if (args.scene is None) == (args.random is None):
+        ap.error("give a SCENE file or --random SEED (one of them)")
+    if args.random is not None and args.random < 0:
+        ap.error(f"--random must be a seed >= 0, got {args.random}")
+    if args.scene is not None and not os.path.isfile(args.scene):
         raise ValueError(f"{args.scene}: no such scene file")
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
     from mi_voldis.synth.make import make_dataset
-    print(make_dataset(args.scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout))
+    if args.scene is not None:
+        print(make_dataset(args.scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout))
+        return
+    import tempfile
+
+    from mi_voldis.synth.random_scene import write_random_scene
+    with tempfile.TemporaryDirectory() as folder:
+        scene = write_random_scene(args.random, folder, args.views)
+        print(make_dataset(scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout,
+                           scene_folder=folder))
 
 
 if __name__ == "__main__":

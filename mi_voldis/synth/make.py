@@ -9,6 +9,7 @@ Deterministic for a seed.
 """
 import json
 import os
+import shutil
 
 import drjit as dr
 import mitsuba as mi
@@ -86,8 +87,10 @@ def depth_bounds(root, cameras, width, height):
     return np.array(bounds)
 
 
-def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0, holdout=8, progress=True):
-    """Render the dataset of ``scene_path`` into ``out`` (see the module docstring); returns ``out``."""
+def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0, holdout=8, progress=True,
+                 scene_folder=None):
+    """Render the dataset of ``scene_path`` into ``out`` (see the module docstring); returns ``out``.
+    ``scene_folder``: a folder copied into the dataset as ``scene/`` (e.g. a generated scene)."""
     rig = load_rig(scene_path)
     root = variants.parse(scene_path)
     prefix = rig.get("object_prefix", "object")
@@ -107,6 +110,8 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
               "moved": variants.moved(root, prefix, moved_matrix)}
 
     with staged(out) as tmp:
+        if scene_folder is not None:
+            shutil.copytree(scene_folder, os.path.join(tmp, "scene"))
         _render_views(tmp, scene_path, scenes, cameras, split, width, height, spp, seed, progress)
         frames = []
         for k, (cam, name) in enumerate(zip(cameras, _names(views))):
