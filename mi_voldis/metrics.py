@@ -63,3 +63,17 @@ def dilate(mask, radius):
             out[tuple(lo)] |= src[tuple(hi)]
             out[tuple(hi)] |= src[tuple(lo)]
     return out
+
+
+def object_residue(render, photo, background, mask, min_difference=0.1):
+    """Fraction of the object's pixels (``mask``) where a removal ``render`` is closer to the photo (the
+    object's own colour) than to the ground-truth ``background``: 0 when no trace of the object is left,
+    1 when the object is still there. Pixels where photo and background differ by less than
+    ``min_difference`` (RGB distance) say nothing either way and are left out; NaN when none is left."""
+    render, photo, background = (np.asarray(x, np.float64) for x in (render, photo, background))
+    telling = np.asarray(mask, bool) & (np.linalg.norm(photo - background, axis=-1) > min_difference)
+    if not telling.any():
+        return float("nan")
+    to_photo = np.linalg.norm(render - photo, axis=-1)[telling]
+    to_background = np.linalg.norm(render - background, axis=-1)[telling]
+    return float(np.mean(to_photo < to_background))

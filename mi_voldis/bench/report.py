@@ -126,13 +126,15 @@ def _accuracy(results, report_dir):
         removal = tasks["removal"]["metrics"]
         if "methods" in removal:
             md += ["| removal (in-mask = masks dilated by 3% of the diagonal) | PSNR in mask | SSIM in mask | "
-                   "PSNR whole | view consistency PSNR |", "|---|---|---|---|---|"]
+                   "PSNR whole | view consistency PSNR | object residue |", "|---|---|---|---|---|---|"]
             labels = {"volume": "background volume (ours)", "telea": "OpenCV Telea", "ns": "OpenCV Navier-Stokes"}
             for name, r in removal["methods"].items():
                 label = labels[name]
                 md.append(f"| {label} | {_f(r['psnr_mask'], 2)} | {_f(r['ssim_mask'], 3)} | {_f(r['psnr'], 2)} | "
-                          f"{_f(r['consistency_psnr'], 2)} |")
-            md.append("")
+                          f"{_f(r['consistency_psnr'], 2)} | {_f(r.get('residue'), 3)} |")
+            md += ["", "Object residue: the share of the object's pixels whose removal is closer to the object's "
+                   "own colour than to the true background (0: no trace of the object; "
+                   "`mi_voldis.metrics.object_residue`).", ""]
         tr = tasks["transform"]["metrics"]
         if tr.get("ground_truth"):
             md += ["| moved object, rule | PSNR vs ground truth | SSIM |", "|---|---|---|"]

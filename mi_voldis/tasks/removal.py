@@ -1,7 +1,9 @@
 """Removal: the background volume on its own (paper: removal == the background in isolation).
 
 Measured against the ground truth where the dataset has it, and against OpenCV's 2D inpainting
-(Telea and Navier-Stokes, per view, with the same dilated masks): PSNR / SSIM inside the masks, and
+(Telea and Navier-Stokes, per view, with the same dilated masks): PSNR / SSIM inside the masks, the
+object's residue (:func:`mi_voldis.metrics.object_residue`: the share of its pixels still closer to its
+own colour than to the true background), and
 view-to-view consistency: each held-out view's inpainting, reprojected into its nearest held-out
 neighbour with the background's depth, compared there inside the mask (a per-view 2D method has no
 reason to agree with itself across views; a volume does by construction).
@@ -9,7 +11,7 @@ reason to agree with itself across views; a volume does by construction).
 import numpy as np
 
 from ..cameras import pixel_rays, project
-from ..metrics import dilate, psnr, ssim
+from ..metrics import dilate, object_residue, psnr, ssim
 
 
 def opencv_inpaint(image, mask, method):
@@ -52,7 +54,7 @@ def run(run, output, progress=True):
         depth[v] = renders[v]["bg"][2]
     rows = {}
     for name, images in methods.items():
-        row = {"psnr_mask": [], "ssim_mask": [], "psnr": [], "consistency_psnr": []}
+        row = {"psnr_mask": [], "ssim_mask": [], "psnr": [], "consistency_psnr": [], "residue": []}
         tests = list(ds.test)
         for k, v in enumerate(tests):
             region = dilate(ds.masks[v], dil)
@@ -61,6 +63,9 @@ def run(run, output, progress=True):
                 row["psnr_mask"].append(psnr(images[v], gt, region))
                 row["ssim_mask"].append(ssim(images[v], gt, region))
                 row["psnr"].append(psnr(images[v], gt))
+                residue = object_residue(images[v], ds.images[v], gt, ds.masks[v])
+                if np.isfinite(residue):
+                    row["residue"].append(residue)
             if len(tests) > 1:  # consistency with the nearest other held-out view
                 others = [u for u in tests if u != v]
                 pos = np.array([ds.cameras[u].to_world[:3, 3] for u in others])
