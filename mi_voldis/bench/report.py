@@ -135,6 +135,8 @@ def _accuracy(results, report_dir):
             md += ["", "Object residue: the share of the object's pixels whose removal is closer to the object's "
                    "own colour than to the true background (0: no trace of the object; "
                    "`mi_voldis.metrics.object_residue`).", ""]
+        if "transform" not in tasks:  # random scenes: removal only
+            continue
         tr = tasks["transform"]["metrics"]
         if tr.get("ground_truth"):
             md += ["| moved object, rule | PSNR vs ground truth | SSIM |", "|---|---|---|"]
