@@ -20,6 +20,8 @@ def main(argv=None):
                     help="only profile one training step (128^3, 128 samples/ray, 16k rays) by kernel")
     ap.add_argument("--rays", default="random", choices=("random", "tiles"),
                     help="--step-profile: random rays or fitting's tiled batches")
+    ap.add_argument("--scenes", help="comma-separated scenes whose fits and tasks run (default: all); finished "
+                                     "runs in --work with the same settings are reused")
     ap.add_argument("--variant", default="llvm_ad_rgb")
     args = ap.parse_args(argv)
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
@@ -33,8 +35,11 @@ def main(argv=None):
         return
     from mi_voldis.bench import report
     from mi_voldis.bench.run import run_all
-    results = run_all(args.quick, os.path.abspath(args.work), args.report)
-    report.write(results, args.report, "python scripts/bench.py" + (" --quick" if args.quick else ""))
+    scenes = args.scenes.split(",") if args.scenes else None
+    results = run_all(args.quick, os.path.abspath(args.work), args.report, scenes)
+    command = "python scripts/bench.py" + (" --quick" if args.quick else "") + \
+        (f" --scenes {args.scenes}" if args.scenes else "")
+    report.write(results, args.report, command)
     print(os.path.join(args.report, "bench.md"))
 
 

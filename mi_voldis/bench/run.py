@@ -82,10 +82,15 @@ QUICK_SETS = ["minutes=null", "steps_full=200", "steps_bg=40", "resolution_sched
 
 
 def fit(dataset, out, sets, log_dir):
+    """Fit ``dataset`` into ``out`` with the ``--set`` overrides ``sets``; a finished run of the same
+    dataset and settings already in ``out`` is reused (delete it to fit again)."""
     args = ["scripts/train.py", dataset, "--out", out, "--quiet"]
     for s in sets:
         args += ["--set", s]
-    seconds = child(args, os.path.join(log_dir, os.path.basename(out) + ".log"))
+    if finished(out, dataset, sets):
+        seconds = None
+    else:
+        seconds = child(args, os.path.join(log_dir, os.path.basename(out) + ".log"))
     with open(os.path.join(out, "metrics.json")) as f:
         metrics = json.load(f)
     with open(os.path.join(out, "log.json")) as f:
@@ -93,6 +98,20 @@ def fit(dataset, out, sets, log_dir):
     curve = [(r["time"], r["test_psnr"]) for r in log if "test_psnr" in r]
     return {"out": out, "wall_seconds": seconds, "rss_mib": metrics.get("peak_rss_mib"), "metrics": metrics,
             "curve": curve, "folder_mib": folder_bytes(out) / 2 ** 20, "command": "python " + " ".join(args)}
+
+
+def finished(out, dataset, sets):
+    """``out`` holds a finished fit of ``dataset`` with exactly the settings ``sets`` give."""
+    from ..fit.config import FitConfig
+    try:
+        with open(os.path.join(out, "config.json")) as f:
+            config = json.load(f)
+    except (OSError, ValueError):
+        return False
+    record = config.pop("dataset", {})
+    same_data = os.path.realpath(record.get("path", "")) == os.path.realpath(dataset)
+    return os.path.isfile(os.path.join(out, "metrics.json")) and same_data and \
+        config == FitConfig.from_sources(None, sets).to_dict()
 
 
 def folder_bytes(path):
@@ -125,7 +144,8 @@ def task(run, name, extra, log_dir):
             "command": "python " + " ".join(args)}
 
 
-def run_all(quick, work, report_dir):
+def run_all(quick, work, report_dir, scenes=None):
+    """Every section; ``scenes``: only these scenes' fits and tasks (default: all)."""
     logs = os.path.join(work, "logs")
     os.makedirs(logs, exist_ok=True)
     results = {"machine": machine.describe(), "bandwidth": machine.copy_bandwidth(0.5 if quick else 2.0),
@@ -136,9 +156,12 @@ def run_all(quick, work, report_dir):
                           for occ in (False, True)]
     fits = {}
     datasets = {scene: make_data(scene, os.path.join(work, "data", scene), logs, quick)
-                for scene in (SCENES[:1] if quick else SCENES + [f"random{k}" for k in RANDOM_SEEDS])}
+                for scene in (SCENES[:1] if quick else SCENES + [f"random{k}" for k in RANDOM_SEEDS])
+                if not scenes or scene in scenes}
     if not quick:
         datasets.update({c: os.path.join(SHARED, c) for c in CAPTURES if os.path.isdir(os.path.join(SHARED, c))})
+    if scenes:
+        datasets = {k: v for k, v in datasets.items() if k in scenes}
     for scene, path in datasets.items():
         configs = {"default": QUICK_SETS if quick else []}
         if not quick:
