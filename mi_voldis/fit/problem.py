@@ -43,6 +43,7 @@ class FieldFit:
         cfg = inputs.cfg
         self.rates = (cfg.lr_density, cfg.lr_color) if rates is None else rates  # (density, colour)
         self.neighbours = {}
+        self.on_stage = None  # called with the step at each later stage's start, before the fields are refined
         self.rebuild(resume=True)
 
     # -- plumbing
@@ -82,6 +83,8 @@ class FieldFit:
         cfg, state = self.inputs.cfg, self.state
         upsample = self.schedule and any(step == start for start, _ in state.schedule[1:])
         if upsample:
+            if self.on_stage is not None:
+                self.on_stage(step)
             self.sync_states()
             refine(self.inputs, state, self.integrator, self.roles, resolution_at(state.schedule, step))
             self.adam.reset()

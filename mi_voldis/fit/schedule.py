@@ -13,7 +13,10 @@ derived from the capture and the time budget once the first, coarse stage has ru
 * the number of steps (``steps_full``, or from ``minutes``) fills the budget, with the seconds a step
   took in the coarse stage scaled to each stage's resolution as (R_k / R_1)^COST_EXPONENT (measured: a
   step costs its samples, proportional to R, and its vertices, to R^2 on surfaces), leaving
-  ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation.
+  ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation;
+* at the start of every later stage the steps still to come are rescaled to the budget that is left
+  (:func:`rescale`), with the seconds a step took in the stage just finished: the cost model only has
+  to be right one stage ahead, so the fit ends on time on any machine and scene.
 """
 import drjit as dr
 import mitsuba as mi
@@ -115,6 +118,23 @@ def schedule_of(plan_stages, steps, first):
     for fraction, level in plan_stages[1:]:
         out.append([max(int(round(fraction * steps)), first + 1, out[-1][0] + 1), level])
     return out
+
+
+def rescale(schedule, steps_full, step, seconds_per_step, budget_left):
+    """(schedule, steps_full) with the stages from ``step`` on (``step`` is a stage start) stretched or
+    shrunk in proportion so that their cost fills ``budget_left`` seconds, a step of the stage just
+    finished having cost ``seconds_per_step`` and a step at resolution R costing that times
+    (R / R_finished)^COST_EXPONENT. Stages keep at least one step; earlier ones are unchanged."""
+    k = next(i for i, (start, _) in enumerate(schedule) if start == step)
+    done, ahead = schedule[:k], schedule[k:]
+    ends = [start for start, _ in ahead[1:]] + [steps_full]
+    lengths = np.array([end - start for (start, _), end in zip(ahead, ends)], np.float64)
+    previous = schedule[k - 1][1] if k > 0 else ahead[0][1]
+    cost = np.array([seconds_per_step * (r / previous) ** COST_EXPONENT for _, r in ahead])
+    factor = max(budget_left, 0.0) / float(np.dot(lengths, cost))
+    lengths = np.maximum(1, np.round(lengths * factor)).astype(int)
+    starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    return done + [[int(s), r] for s, (_, r) in zip(starts, ahead)], int(step + lengths.sum())
 
 
 def resolution_at(schedule, step):

@@ -39,6 +39,7 @@ from .schedule import (
     auto_minutes,
     capture_resolution,
     coarse_resolution,
+    rescale,
     schedule_of,
     stages,
     steps_for,
@@ -113,6 +114,7 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
     if state.schedule is None:
         state.schedule = [[0, coarse_resolution(cfg)]]  # the coarse stage, until planned
     problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True)
+    problem.on_stage = lambda step: replan(state, step)
     eval_fn = held_out_psnr(inputs, problem)
     common = dict(log=state.log, checkpoint=checkpoint(problem), checkpoint_every=cfg.checkpoint_every, eval_fn=eval_fn,
                   eval_every=cfg.eval_every, progress=inputs.progress)
@@ -132,10 +134,28 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
         state.adam.reset()
         problem.rebuild()
         start = sh_step
-    optimize(problem, state.adam, steps=state.steps_full, start=start, final_ratio=cfg.lr_final_ratio,
+    optimize(problem, state.adam, steps=lambda: state.steps_full, start=start, final_ratio=cfg.lr_final_ratio,
              desc="full" if not scratch else "full + bg", **common)
     problem.sync_states()
     state.phase_times["full"] = state.phase_times.get("full", 0.0) + time.perf_counter() - t0
+
+
+def replan(state, step):
+    """With a time budget, rescale the stages from ``step`` (a stage start) to the budget left, timed on
+    the stage just finished (:func:`mi_voldis.fit.schedule.rescale`); explicit step counts stay."""
+    budget = (state.plan or {}).get("budget_seconds")
+    if budget is None:
+        return
+    k = next(i for i, (start, _) in enumerate(state.schedule) if start == step)
+    rows = [r["step_seconds"] for r in state.log if state.schedule[k - 1][0] < r["step"] <= step and
+            "step_seconds" in r and "test_psnr" not in r]
+    rows = rows[len(rows) // 5:]  # past the stage's first steps (kernels compiling, occupancy starting)
+    if not rows:
+        return
+    spent = state.log[-1]["time"]
+    state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, float(np.median(rows)),
+                                               budget - spent)
+    state.plan.setdefault("rescaled", []).append([step, state.steps_full])
 
 
 def plan_schedule(inputs, state, integrator):
@@ -146,12 +166,14 @@ def plan_schedule(inputs, state, integrator):
     final = final or cfg.max_resolution
     state.plan = {"capture_resolution": int(final)}
     if cfg.steps_full is None:
-        rows = [r["step_seconds"] for r in state.log if r["step"] > 20 and "test_psnr" not in r]
+        first = cfg.calibration_steps // 5  # past the first steps (kernels compiling)
+        rows = [r["step_seconds"] for r in state.log if r["step"] > first and "test_psnr" not in r]
         seconds = float(np.median(rows))
         minutes = auto_minutes(inputs.ds) if cfg.minutes == "auto" else cfg.minutes
         spent = state.log[-1]["time"] if state.log else 0.0
         budget = minutes * 60.0 * (1.0 - RESERVED) - spent
-        state.plan.update(minutes=float(minutes), coarse_step_seconds=seconds)
+        state.plan.update(minutes=float(minutes), coarse_step_seconds=seconds,
+                          budget_seconds=minutes * 60.0 * (1.0 - RESERVED))
         if cfg.resolution == "auto":
             state.plan["affordable_resolution"] = int(affordable_resolution(cfg, coarse, seconds, budget,
                                                                             inputs.bank.pixels))

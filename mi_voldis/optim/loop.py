@@ -31,15 +31,20 @@ def decay(step, steps, final_ratio):
 
 def optimize(problem, adam, *, steps, start=0, final_ratio=0.1, log=None, desc="optimise", checkpoint=None,
              checkpoint_every=0, eval_fn=None, eval_every=0, progress=True):
-    """Run ``problem`` from ``start`` to ``steps``. ``checkpoint(step)`` is called every
+    """Run ``problem`` from ``start`` to ``steps`` (a number, or a function giving it, read again every
+    step: a schedule may stretch or shrink while it runs). ``checkpoint(step)`` is called every
     ``checkpoint_every`` steps and at the end; ``eval_fn(step)`` -> dict every ``eval_every`` steps
     (merged into the log). Returns the log (a list of dicts, one per logged step)."""
     log = [] if log is None else log
     elapsed = log[-1]["time"] if log else 0.0
+    end = steps if callable(steps) else (lambda: steps)
     # progress bars on terminals only (None: tqdm disables itself when stderr is not a TTY)
-    bar = tqdm(range(start, steps), desc=desc, disable=None if progress else True, dynamic_ncols=True, leave=False,
+    bar = tqdm(total=end() - start, desc=desc, disable=None if progress else True, dynamic_ncols=True, leave=False,
                mininterval=0.5)
-    for step in bar:
+    step = start - 1
+    while step + 1 < end():
+        step += 1
+        bar.total = end() - start
         t0 = time.perf_counter()
         if hasattr(problem, "before_step"):
             problem.before_step(step)
@@ -52,7 +57,7 @@ def optimize(problem, adam, *, steps, start=0, final_ratio=0.1, log=None, desc="
         grads = {key: _flat(dr.grad(params[key])) for key in problem.keys}
         if hasattr(problem, "extra_gradients"):
             grads = problem.extra_gradients(step, grads)
-        adam.step(params, grads, decay(step, steps, final_ratio))
+        adam.step(params, grads, decay(step, end(), final_ratio))
         params.update()
         if hasattr(problem, "after_step"):
             problem.after_step(step)
@@ -63,11 +68,12 @@ def optimize(problem, adam, *, steps, start=0, final_ratio=0.1, log=None, desc="
         row = {"step": step + 1, "time": elapsed, "loss": loss_value, "step_seconds": dt, **stats}
         if "samples" in stats:
             row["msps"] = stats["samples"] / dt / 1e6
-        if eval_fn is not None and eval_every and ((step + 1) % eval_every == 0 or step + 1 == steps):
+        if eval_fn is not None and eval_every and ((step + 1) % eval_every == 0 or step + 1 == end()):
             row.update(eval_fn(step + 1))
         log.append(row)
+        bar.update(1)
         bar.set_postfix({k: f"{row[k]:.4g}" for k in ("loss", "psnr", "msps") if k in row})
-        if checkpoint is not None and checkpoint_every and ((step + 1) % checkpoint_every == 0 or step + 1 == steps):
+        if checkpoint is not None and checkpoint_every and ((step + 1) % checkpoint_every == 0 or step + 1 == end()):
             checkpoint(step + 1)
     bar.close()
     return log

@@ -1,0 +1,109 @@
+"""The fit's schedule as data (mi_voldis/fit/schedule.py): analytic cases of every rule, and a fit with a
+time budget that plans and rescales its stages."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mi_voldis.fit.config import FitConfig
+from mi_voldis.fit.schedule import (
+    COST_EXPONENT,
+    affordable_resolution,
+    rescale,
+    resolution_at,
+    schedule_of,
+    stages,
+    steps_for,
+)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def test_stages_double_up_to_the_final_resolution_and_start_at_the_given_fractions():
+    cfg = FitConfig()
+    assert stages(cfg, 64, 512) == [(0.0, 64), (0.1, 128), (0.2, 256), (0.35, 512)]
+    assert stages(cfg, 64, 300) == [(0.0, 64), (0.2, 150), (0.35, 300)]
+    assert stages(cfg, 64, 64) == [(0.0, 64)]
+    assert stages(cfg.replace(stages=2), 64, 1024) == [(0.0, 64), (0.35, 1024)]
+
+
+def test_steps_fill_the_budget_under_the_cost_model():
+    plan = [(0.0, 64), (0.5, 128)]
+    steps = steps_for(plan, 0.01, 100.0)
+    cost = 0.01 * (0.5 * steps + 0.5 * steps * 2 ** COST_EXPONENT)
+    assert abs(cost - 100.0) < 0.01 * 2 ** COST_EXPONENT + 1e-9
+    assert schedule_of(plan, steps, 10) == [[0, 64], [round(0.5 * steps), 128]]
+    assert schedule_of([(0.0, 64), (0.01, 128), (0.02, 256)], 100, 10) == [[0, 64], [11, 128], [12, 256]]
+    assert [resolution_at([[0, 64], [11, 128], [12, 256]], s) for s in (0, 10, 11, 12, 99)] == [64, 64, 128, 256, 256]
+
+
+def test_affordable_resolution_shows_every_pixel_min_epochs_times_in_the_last_stage():
+    cfg = FitConfig()
+    pixels, seconds, budget = 2_000_000, 0.01, 600.0
+    r = affordable_resolution(cfg, 64, seconds, budget, pixels)
+    steps = cfg.min_epochs * pixels / cfg.batch_rays
+    last_share = 1.0 - cfg.stage_starts[-1]
+    assert steps * seconds * (r / 64) ** COST_EXPONENT <= last_share * budget  # affordable
+    assert steps * seconds * ((r + 16) / 64) ** COST_EXPONENT > last_share * budget  # the finest such
+    assert r % 16 == 0
+
+
+def test_rescale_fits_the_stages_ahead_to_the_budget_left():
+    schedule, steps = [[0, 64], [200, 128], [400, 256]], 1000
+    cost = 200 * 0.01 * 2 ** COST_EXPONENT + 600 * 0.01 * 4 ** COST_EXPONENT  # of what is ahead at step 200
+    half, steps_half = rescale(schedule, steps, 200, 0.01, cost / 2)
+    assert half == [[0, 64], [200, 128], [300, 256]] and steps_half == 600
+    double, steps_double = rescale(schedule, steps, 200, 0.01, 2 * cost)
+    assert double == [[0, 64], [200, 128], [600, 256]] and steps_double == 1800
+    late, steps_late = rescale(schedule, steps, 400, 0.02, 0.0)  # out of time: one step per stage left
+    assert late == [[0, 64], [200, 128], [400, 256]] and steps_late == 401
+
+
+def test_a_budgeted_fit_plans_from_the_capture_and_reports_its_plan(tiny_dataset, tmp_path):
+    out = tmp_path / "run"
+    sets = ["minutes=0.2", "calibration_steps=20", "coarse_resolution=8", "batch_rays=512", "steps_bg=4",
+            "sh_degree=0", "eval_every=1000", "occupancy_at_step=10"]
+    done = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "train.py"), tiny_dataset, "--out", str(out),
+                           "--quiet"] + [x for s in sets for x in ("--set", s)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    metrics = json.load(open(out / "metrics.json"))
+    plan, stages_ = metrics["schedule"]["plan"], metrics["schedule"]["stages"]
+    assert plan["minutes"] == 0.2 and plan["final_resolution"] <= plan["capture_resolution"]
+    assert stages_[0] == [0, 8] and stages_[-1][1] == plan["final_resolution"]
+    assert [s for s, _ in stages_] == sorted({s for s, _ in stages_})  # starts strictly increasing
+    if len(stages_) > 2:
+        assert plan["rescaled"] and plan["rescaled"][-1][1] == metrics["schedule"]["steps_full"]
+    log = json.load(open(out / "log.json"))
+    assert [r["step"] for r in log if "psnr" in r][-1] == metrics["schedule"]["steps_full"]
+    assert np.isfinite(metrics["held_out"]["psnr"])
+
+
+@pytest.mark.parametrize("steps", [5, 17])
+def test_the_optimisation_loop_follows_an_end_that_moves(steps):
+    import mitsuba as mi
+
+    from mi_voldis.optim.loop import optimize
+
+    class Problem:  # stretches its own end at step 3
+        keys = ["x"]
+
+        def __init__(self):
+            self.end, self.seen, self.params = 10, [], {"x": mi.Float(1.0)}
+
+        def before_step(self, step):
+            self.seen.append(step)
+            if step == 3:
+                self.end = steps
+
+        def loss(self, step):
+            return self.params["x"] * self.params["x"], {}
+
+    class NoAdam:
+        def step(self, params, grads, factor):
+            pass
+    p = Problem()
+    log = optimize(p, NoAdam(), steps=lambda: p.end, progress=False)
+    assert p.seen == list(range(max(steps, 4))) and [r["step"] for r in log] == list(range(1, max(steps, 4) + 1))
