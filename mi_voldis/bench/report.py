@@ -103,7 +103,10 @@ def _speed_error(results, report_dir):
                "moved lower, closer, and lower with a 1.5x wider field of view (space no training view saw stays "
                "empty, i.e. black):", ""]
         md += [f"![{scene} off-path views]({png})" for scene, png in results["offpath"].items()]
-    md += ["", "Commands:", ""] + [f"- {name}: `{f['command']}`" for name, f in results["fits"].items()]
+    md += ["", "Commands:", ""] + [f"- {name}: `{f['command']}`" + (f" (reused: fitted {f['fitted']} UTC by an earlier "
+                                                                        "run of the benchmark in the same work folder)"
+                                                                        if f.get("reused") else "")
+                                   for name, f in results["fits"].items()]
     return md + [""]
 
 

@@ -97,7 +97,9 @@ def fit(dataset, out, sets, log_dir):
         log = json.load(f)
     curve = [(r["time"], r["test_psnr"]) for r in log if "test_psnr" in r]
     return {"out": out, "wall_seconds": seconds, "rss_mib": metrics.get("peak_rss_mib"), "metrics": metrics,
-            "curve": curve, "folder_mib": folder_bytes(out) / 2 ** 20, "command": "python " + " ".join(args)}
+            "curve": curve, "folder_mib": folder_bytes(out) / 2 ** 20, "command": "python " + " ".join(args),
+            "reused": seconds is None, "fitted": time.strftime("%Y-%m-%d %H:%M", time.gmtime(os.path.getmtime(
+                os.path.join(out, "metrics.json"))))}
 
 
 def finished(out, dataset, sets):
