@@ -31,7 +31,13 @@ def write_scene(folder, fields, properties, cameras=(), name="scene.xml"):
     grids) or ``<role>_density.vol`` / ``<role>_color.vol`` (dense grids) and ``folder/name``: a scene with
     these fields, the integrator ``properties`` and one sensor per camera
     (:class:`mi_voldis.cameras.Camera`). Returns the scene file's path."""
-    bodies = {role: save_any_field(folder, role, f) for role, f in fields.items()}
+    bodies, written = {}, {}
+    for role, f in fields.items():  # a field that is another role's (a background without masks) is written once
+        data = getattr(f, "data", None)
+        key = id(data) if data is not None else id(f)
+        if key not in written:
+            written[key] = save_any_field(folder, role, f)
+        bodies[role] = written[key]
     sensors = [sensor_xml(c.to_world, c.fov_x, c.width, c.height, 1, c.principal) for c in cameras]
     path = os.path.join(folder, name)
     write_scene_xml(path, bodies, properties, sensors)

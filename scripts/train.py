@@ -2,8 +2,8 @@
 
     python scripts/train.py DATASET --out RUN [--variant V] [--config FILE] [--set name=value ...] [--resume]
 
-Writes RUN/ (fields as .vol, scene.xml, config.json, metrics.json, previews/, training.png,
-checkpoints/). The settings are listed below (defined in mi_voldis/fit/config.py).
+Writes RUN/ (fields as <role>_grid.npz, scene.xml, config.json, metrics.json, previews/, training.png;
+checkpoints/ while it runs). The settings are listed below (defined in mi_voldis/fit/config.py).
 """
 import argparse
 import json

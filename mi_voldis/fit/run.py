@@ -1,8 +1,8 @@
 """A fitting run: stage, fit, write, then swap the run folder into place (:mod:`mi_voldis.io.run_folder`).
 
-RUN/ holds the fields (``.vol``), ``scene.xml`` (renders them through ``mi.load_file``),
+RUN/ holds the fields (``<role>_grid.npz``), ``scene.xml`` (renders them through ``mi.load_file``),
 ``config.json`` (the settings and the dataset they were fitted on), ``metrics.json``, ``log.json``,
-``training.png``, ``previews/`` and ``checkpoints/``. ``resume`` continues from
+``training.png`` and ``previews/`` (and while it runs ``checkpoints/``). ``resume`` continues from
 RUN.partial/checkpoints/last.npz after a crash or kill -9.
 """
 import os

@@ -3,7 +3,7 @@
 Every long job (a fit, a task, a rendered dataset) writes into ``OUT.partial`` and, once complete,
 renames it to ``OUT`` (an existing ``OUT`` is first renamed to ``OUT.old`` and removed after the
 swap), so ``OUT`` is never half-written and a failure leaves it as it was. A killed job leaves its
-``OUT.partial`` with its checkpoints for ``--resume``.
+``OUT.partial`` with its checkpoints for ``--resume``; a finished job's ``OUT`` holds no checkpoints.
 """
 import contextlib
 import json
@@ -17,6 +17,7 @@ def staging(out):
     return out.rstrip("/") + ".partial"
 
 
+CHECKPOINTS = "checkpoints"  # the folder of a job's checkpoints, inside its OUT.partial
 MIN_FREE_BYTES = 256 << 20  # refuse to start a job with less free disk than this beside OUT
 
 
@@ -48,7 +49,7 @@ def staged(out, resume=False):
     """``with staged(OUT, resume) as stage:`` write everything into ``stage``; on leaving the block
     without an exception it replaces ``OUT``. ``resume``: continue an existing ``OUT.partial``.
     A failed job leaves ``OUT`` as it was, and its ``OUT.partial`` only if it holds a checkpoint to
-    resume from."""
+    resume from; a finished one drops its ``checkpoints/`` (what it made is written beside them)."""
     check_output(out, resume)
     stage = staging(out)
     if not resume:
@@ -61,6 +62,7 @@ def staged(out, resume=False):
             shutil.rmtree(stage, ignore_errors=True)
         raise
     commit(stage, out)
+    shutil.rmtree(os.path.join(out, CHECKPOINTS), ignore_errors=True)
 
 
 def _has_checkpoint(stage):
