@@ -32,7 +32,7 @@ def main(argv=None):
     print(json.dumps({"seconds": {k: round(v, 1) for k, v in summary["seconds"].items()},
                       "held_out": {k: round(v, 3) for k, v in fit.items()}}, indent=1))
     print(f"dataset:        {summary['dataset']}")
-    print(f"fitted run:     {summary['run']}  (scene.xml, *.vol, metrics.json, previews/, training.png)")
+    print(f"fitted run:     {summary['run']}  (scene.xml, *_grid.npz, metrics.json, previews/, training.png)")
     for task in summary["tasks"]:
         print(f"{task + ':':15} {os.path.join(summary['run'], task)}  (scene.xml, viewNNN.exr, previews, metrics.json)")
     print(f"contact sheet:  {summary['contact_sheet']}")
