@@ -72,8 +72,7 @@ RANDOM_SEEDS = [0, 1, 2, 3, 4]  # random scenes (make_dataset.py --random): the 
 CAPTURES = ["fern", "horns", "statue", "garden"]  # ../shared/data; skipped when absent
 VARIANTS = {
     "tabletop": {"dense (carve=false)": ["carve=false"]},
-    "fern": {"dense (carve=false)": ["carve=false"],
-             "dense 192 NDC, fixed schedule (before)": ["space=\"ndc\"", "carve=false", "minutes=null",
+    "fern": {"dense 192 NDC, fixed schedule (before)": ["space=\"ndc\"", "carve=false", "minutes=null",
                                                        "steps_full=1400",
                                                        "resolution_schedule=[[0,64],[300,128],[700,192]]"]},
 }
