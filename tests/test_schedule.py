@@ -54,12 +54,18 @@ def test_affordable_resolution_shows_every_pixel_min_epochs_times_in_the_last_st
 def test_rescale_fits_the_stages_ahead_to_the_budget_left():
     schedule, steps = [[0, 64], [200, 128], [400, 256]], 1000
     cost = 200 * 0.01 * 2 ** COST_EXPONENT + 600 * 0.01 * 4 ** COST_EXPONENT  # of what is ahead at step 200
-    half, steps_half = rescale(schedule, steps, 200, 0.01, cost / 2)
+    half, steps_half = rescale(schedule, steps, 200, 0.01, 64, cost / 2)
     assert half == [[0, 64], [200, 128], [300, 256]] and steps_half == 600
-    double, steps_double = rescale(schedule, steps, 200, 0.01, 2 * cost)
+    double, steps_double = rescale(schedule, steps, 200, 0.01, 64, 2 * cost)
     assert double == [[0, 64], [200, 128], [600, 256]] and steps_double == 1800
-    late, steps_late = rescale(schedule, steps, 400, 0.02, 0.0)  # out of time: one step per stage left
+    late, steps_late = rescale(schedule, steps, 400, 0.02, 128, 0.0)  # out of time: one step per stage left
     assert late == [[0, 64], [200, 128], [400, 256]] and steps_late == 401
+    # within the last stage, timed on itself: 300 steps left at 0.05 s, 7.5 s of budget -> 150 steps
+    mid, steps_mid = rescale(schedule, steps, 700, 0.05, 256, 7.5)
+    assert mid == schedule and steps_mid == 850
+    # within a stage that has one after it: both shrink in proportion, the current one keeps its start
+    inner, steps_inner = rescale(schedule, steps, 300, 0.01, 128, (100 * 0.01 + 600 * 0.01 * 2 ** COST_EXPONENT) / 2)
+    assert inner == [[0, 64], [200, 128], [350, 256]] and steps_inner == 650
 
 
 def test_a_budgeted_fit_plans_from_the_capture_and_reports_its_plan(tiny_dataset, tmp_path):

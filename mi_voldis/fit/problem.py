@@ -12,7 +12,7 @@ from ..optim.parameters import PackedParameters
 from ..regularizers import sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
 from .fields import fit_integrator, occupancy_resolution, occupancy_sigma, refine
-from .schedule import resolution_at
+from .schedule import REPLAN_EVERY, resolution_at
 
 
 def backdrop(ds, rng, n):
@@ -43,7 +43,8 @@ class FieldFit:
         cfg = inputs.cfg
         self.rates = (cfg.lr_density, cfg.lr_color) if rates is None else rates  # (density, colour)
         self.neighbours = {}
-        self.on_stage = None  # called with the step at each later stage's start, before the fields are refined
+        self.on_stage = None  # called with the step at each later stage's start (before the fields are refined)
+        # and every REPLAN_EVERY steps: the schedule may be rescaled there
         self.rebuild(resume=True)
 
     # -- plumbing
@@ -82,9 +83,9 @@ class FieldFit:
     def before_step(self, step):
         cfg, state = self.inputs.cfg, self.state
         upsample = self.schedule and any(step == start for start, _ in state.schedule[1:])
+        if self.on_stage is not None and (upsample or (self.schedule and step % REPLAN_EVERY == 0)):
+            self.on_stage(step)
         if upsample:
-            if self.on_stage is not None:
-                self.on_stage(step)
             self.sync_states()
             refine(self.inputs, state, self.integrator, self.roles, resolution_at(state.schedule, step))
             self.adam.reset()

@@ -14,9 +14,10 @@ derived from the capture and the time budget once the first, coarse stage has ru
   took in the coarse stage scaled to each stage's resolution as (R_k / R_1)^COST_EXPONENT (measured: a
   step costs its samples, proportional to R, and its vertices, to R^2 on surfaces), leaving
   ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation;
-* at the start of every later stage the steps still to come are rescaled to the budget that is left
-  (:func:`rescale`), with the seconds a step took in the stage just finished: the cost model only has
-  to be right one stage ahead, so the fit ends on time on any machine and scene.
+* at the start of every later stage and every ``REPLAN_EVERY`` steps the steps still to come are
+  rescaled to the budget that is left (:func:`rescale`), with the seconds a step took in the stage just
+  finished or running: the cost model only has to be right one stage ahead, and within the last stage
+  not at all, so the fit ends on time on any machine and scene.
 """
 import drjit as dr
 import mitsuba as mi
@@ -120,21 +121,25 @@ def schedule_of(plan_stages, steps, first):
     return out
 
 
-def rescale(schedule, steps_full, step, seconds_per_step, budget_left):
-    """(schedule, steps_full) with the stages from ``step`` on (``step`` is a stage start) stretched or
-    shrunk in proportion so that their cost fills ``budget_left`` seconds, a step of the stage just
-    finished having cost ``seconds_per_step`` and a step at resolution R costing that times
-    (R / R_finished)^COST_EXPONENT. Stages keep at least one step; earlier ones are unchanged."""
-    k = next(i for i, (start, _) in enumerate(schedule) if start == step)
-    done, ahead = schedule[:k], schedule[k:]
-    ends = [start for start, _ in ahead[1:]] + [steps_full]
-    lengths = np.array([end - start for (start, _), end in zip(ahead, ends)], np.float64)
-    previous = schedule[k - 1][1] if k > 0 else ahead[0][1]
-    cost = np.array([seconds_per_step * (r / previous) ** COST_EXPONENT for _, r in ahead])
+REPLAN_EVERY = 100  # steps between rescalings within a stage (and at every stage start)
+
+
+def rescale(schedule, steps_full, step, seconds_per_step, measured_resolution, budget_left):
+    """(schedule, steps_full) with the steps from ``step`` on stretched or shrunk in proportion so that
+    their cost fills ``budget_left`` seconds, a step at ``measured_resolution`` having cost
+    ``seconds_per_step`` and a step at resolution R that times (R / measured)^COST_EXPONENT. What is
+    ahead is the rest of the stage holding ``step`` and the stages after it; each keeps at least one
+    step; the steps before ``step`` are unchanged."""
+    k = max(i for i, (start, _) in enumerate(schedule) if start <= step)
+    starts = [step] + [start for start, _ in schedule[k + 1:]]
+    levels = np.array([r for _, r in schedule[k:]], np.float64)
+    lengths = np.diff(starts + [steps_full]).astype(np.float64)
+    cost = seconds_per_step * (levels / measured_resolution) ** COST_EXPONENT
     factor = max(budget_left, 0.0) / float(np.dot(lengths, cost))
     lengths = np.maximum(1, np.round(lengths * factor)).astype(int)
-    starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    return done + [[int(s), r] for s, (_, r) in zip(starts, ahead)], int(step + lengths.sum())
+    new_starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    ahead = [[int(s), r] for s, (_, r) in zip(new_starts[1:], schedule[k + 1:])]
+    return schedule[:k + 1] + ahead, int(step + lengths.sum())
 
 
 def resolution_at(schedule, step):

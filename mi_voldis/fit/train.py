@@ -141,20 +141,23 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
 
 
 def replan(state, step):
-    """With a time budget, rescale the stages from ``step`` (a stage start) to the budget left, timed on
-    the stage just finished (:func:`mi_voldis.fit.schedule.rescale`); explicit step counts stay."""
+    """With a time budget, rescale the steps from ``step`` to the budget left (:func:`rescale`), timed on
+    the stage just finished (at a stage start) or on the one running; explicit step counts stay."""
     budget = (state.plan or {}).get("budget_seconds")
-    if budget is None:
+    if budget is None or step >= state.steps_full:
         return
-    k = next(i for i, (start, _) in enumerate(state.schedule) if start == step)
-    rows = [r["step_seconds"] for r in state.log if state.schedule[k - 1][0] < r["step"] <= step and
+    k = max(i for i, (start, _) in enumerate(state.schedule) if start <= step)
+    timed = k - 1 if state.schedule[k][0] == step else k  # the stage whose steps are timed
+    if timed < 0:
+        return
+    end = state.schedule[timed + 1][0] if timed + 1 < len(state.schedule) else state.steps_full
+    rows = [r["step_seconds"] for r in state.log if state.schedule[timed][0] < r["step"] <= min(step, end) and
             "step_seconds" in r and "test_psnr" not in r]
     rows = rows[len(rows) // 5:]  # past the stage's first steps (kernels compiling, occupancy starting)
-    if not rows:
+    if len(rows) < 10:
         return
-    spent = state.log[-1]["time"]
     state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, float(np.median(rows)),
-                                               budget - spent)
+                                               state.schedule[timed][1], budget - state.log[-1]["time"])
     state.plan.setdefault("rescaled", []).append([step, state.steps_full])
 
 
