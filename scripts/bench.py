@@ -4,7 +4,8 @@
     python scripts/bench.py --step-profile [--rays random|tiles]   (a training step by kernel, record on and off)
 
 Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
-PNG plots. --quick is a smoke run of a few minutes; the full run takes under an hour on 2 cores.
+PNG plots. --quick is a smoke run of a few minutes; the full run fits every bundled scene, capture and
+random seed with the default budgets (hours on 2 cores); --scenes picks some.
 """
 import argparse
 import os
