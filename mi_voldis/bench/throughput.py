@@ -54,7 +54,7 @@ def trainer(resolution, samples, channels=3, fields=("full",), rays="random", re
         dr.backward(loss)
         adam.step(params, {key: dr.grad(params[key]) for key in params})
         params.update()
-        dr.eval(params)
+        dr.eval([params[key] for key in params])  # the update itself (the container is not traversed)
         return float(dr.sum(out["evaluated"])[0])
     return integ, step
 
