@@ -29,13 +29,15 @@ def main(argv=None):
     ap.add_argument("--holdout", type=int, default=8, help="every k-th view is held out (without a split)")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
+    ap.add_argument("--keep-checkpoints", action="store_true", help="keep RUN/checkpoints/last.npz (the final state)")
     add_debug(ap)
     args = ap.parse_args(argv)
     if args.holdout < 0:
         ap.error(f"--holdout must be 0 (no test views) or a positive k, got {args.holdout}")
     from mi_voldis.fit.run import run_fit
     cfg = FitConfig.from_sources(args.config, args.set)
-    metrics = run_fit(args.dataset, args.out, cfg, args.resume, not args.quiet, args.format, args.holdout)
+    metrics = run_fit(args.dataset, args.out, cfg, args.resume, not args.quiet, args.format, args.holdout,
+                      args.keep_checkpoints)
     print(json.dumps({"run": args.out, **metrics["held_out"], "seconds": metrics["seconds"]}, indent=1))
 
 

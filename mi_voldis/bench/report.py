@@ -191,3 +191,65 @@ def _copy_previews(run, report_dir, scene):
             shutil.copyfile(src, os.path.join(report_dir, name))
             out.append((label, name))
     return out
+
+
+def write_removal(results, report_dir, command):
+    """reports/removal.md: one table per scene (strategy rows, OpenCV beside), previews copied beside it.
+    Returns the file's path."""
+    md = ["# Removal by background strategy", "",
+          f"Run {results['date']} with `{command}` ({results['seconds'] / 60:.1f} min). Machine: "
+          f"{results['machine']['cpu']}, {results['machine']['cores']} cores; variant "
+          f"`{results['machine']['variant']}`.", "",
+          "Each scene is fitted once with the default command (`scripts/train.py DATA --out RUN "
+          "--keep-checkpoints`, no setting); from its full field the background is fitted again with each "
+          "`bg_strategy` (`python -m mi_voldis.bench.strategies RUN STRATEGY OUT`, every other setting as "
+          "the run's). Scores on the held-out views against the ground-truth background: PSNR inside the "
+          "masks (dilated by 3% of the diagonal) and outside them (the full field's outside them beside it), "
+          "the object's residue (share of its pixels closer to its own colour than to the true background; "
+          "lower is better), view-to-view consistency (each view's result warped into its nearest held-out "
+          "neighbour with the background's depth, PSNR there inside the mask), the foreground coverage IoU "
+          "(sum max(w_fg, 0) > 0.5 against the exact coverage), and the seconds of the background phase. "
+          "Telea / Navier-Stokes: OpenCV on each held-out view itself (they see the photo around the mask).",
+          ""]
+    for scene, entry in results["scenes"].items():
+        fit = entry["fit"]
+        m = fit["metrics"]
+        md += [f"## {scene}", "",
+               f"Full field: held-out PSNR {m['held_out']['psnr']:.2f} dB, fit {m['seconds']['fit']:.0f} s "
+               f"({'reused' if fit['reused'] else 'fitted'} {fit['fitted']} UTC).", "",
+               "| strategy | PSNR in mask | PSNR outside (full: ) | residue | consistency | coverage IoU | "
+               "bg seconds |", "|---|---|---|---|---|---|---|"]
+        base = None
+        for strategy, row in entry["strategies"].items():
+            v = row["methods"]["volume"]
+            base = row["methods"]
+            md.append(f"| {strategy} | {_f(v['psnr_mask'], 2)} | {_f(v['psnr_outside'], 2)} "
+                      f"({_f(v.get('full_psnr_outside'), 2)}) | {_f(v['residue'], 2)} | "
+                      f"{_f(v['consistency_psnr'], 2)} | {_f(v.get('fg_coverage_iou'), 2)} | {row['seconds']:.0f} |")
+        for name in ("telea", "ns"):
+            r = base[name]
+            md.append(f"| OpenCV {name} | {_f(r['psnr_mask'], 2)} | {_f(r['psnr_outside'], 2)} | "
+                      f"{_f(r['residue'], 2)} | {_f(r['consistency_psnr'], 2)} | - | - |")
+        prior = entry["strategies"].get("lift", {}).get("prior")
+        if prior and prior.get("reference_view") is not None:
+            md += ["", f"`lift`: reference view {prior['reference_view']}, {prior['hole_pixels']} pixels "
+                       f"inpainted and lifted, of which {100 * prior['seen_elsewhere']:.0f}% land where another "
+                       f"view sees unmasked; {prior['vertices_emptied']} vertices emptied, "
+                       f"{prior['vertices_written']} written."]
+        tiles = []
+        for strategy, row in entry["strategies"].items():
+            for f in sorted(os.listdir(row["out"])):
+                if f.endswith("_bg.png"):
+                    name = f"removal_{scene}_{strategy}_{f}"
+                    shutil.copy(os.path.join(row["out"], f), os.path.join(report_dir, name))
+                    tiles.append((strategy, f[:7], name))
+        if tiles:
+            md += ["", "Backgrounds of the held-out views (rows: strategies):", ""]
+            for strategy in entry["strategies"]:
+                md.append(" ".join(f"![{strategy} {view}]({name})" for s, view, name in tiles if s == strategy)
+                          + f" `{strategy}`")
+        md.append("")
+    path = os.path.join(report_dir, "removal.md")
+    with open(path, "w") as f:
+        f.write("\n".join(md) + "\n")
+    return path

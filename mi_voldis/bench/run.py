@@ -6,7 +6,9 @@ Sections (each a function returning rows for the report):
 2. held-out PSNR against wall-clock seconds of the default command on every bundled scene and real
    capture (and the dense grid beside it on some); evaluated samples per ray, run-folder size;
 3. cost against scene content (small / large box, occupancy on / off);
-4. accuracy against ground truth on the bundled scenes (removal vs OpenCV, moved object per
+4. removal by background strategy on the bundled and random ground-truth scenes, beside OpenCV's 2D
+   inpainting (its own report, reports/removal.md: ``scripts/bench.py --removal``);
+5. accuracy against ground truth on the bundled scenes (removal vs OpenCV, moved object per
    composition rule, foreground coverage), and every task on the real statue capture.
 Fits and tasks run as child processes (scripts/train.py, scripts/optimize.py), which also gives
 their peak RSS.
@@ -80,13 +82,14 @@ QUICK_SETS = ["minutes=null", "steps_full=200", "steps_bg=40", "resolution_sched
               "sh_degree=0", "occupancy_at_step=80", "eval_every=50"]
 
 
-def fit(dataset, out, sets, log_dir):
+def fit(dataset, out, sets, log_dir, keep=False):
     """Fit ``dataset`` into ``out`` with the ``--set`` overrides ``sets``; a finished run of the same
-    dataset and settings already in ``out`` is reused (delete it to fit again)."""
-    args = ["scripts/train.py", dataset, "--out", out, "--quiet"]
+    dataset and settings already in ``out`` is reused (delete it to fit again). ``keep``: the run keeps
+    its final checkpoint (the removal section refits the background from it)."""
+    args = ["scripts/train.py", dataset, "--out", out, "--quiet"] + (["--keep-checkpoints"] if keep else [])
     for s in sets:
         args += ["--set", s]
-    if finished(out, dataset, sets):
+    if finished(out, dataset, sets) and (not keep or os.path.isfile(os.path.join(out, "checkpoints", "last.npz"))):
         seconds = None
     else:
         seconds = child(args, os.path.join(log_dir, os.path.basename(out) + ".log"))
@@ -135,7 +138,39 @@ def make_data(scene, out, log_dir, quick):
     return out
 
 
-# ------------------------------------------------------------------------------------ 4. accuracy
+# ------------------------------------------------------------------------------------ 4. removal
+STRATEGIES = ["lift", "clear", "harmonic"]  # bg_strategy values compared from one fitted full field
+
+
+def run_removal(work, report_dir, scenes=None):
+    """Removal by background strategy on every ground-truth scene (bundled and random), each from the
+    default command's full field (:mod:`mi_voldis.bench.strategies`); previews copied to ``report_dir``."""
+    logs = os.path.join(work, "logs")
+    os.makedirs(logs, exist_ok=True)
+    names = [s for s in SCENES + [f"random{k}" for k in RANDOM_SEEDS] if not scenes or s in scenes]
+    results = {"machine": machine.describe(), "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "scenes": {}}
+    t0 = time.perf_counter()
+    for scene in names:
+        data = make_data(scene, os.path.join(work, "data", scene), logs, False)
+        run = fit(data, os.path.join(work, "runs", f"{scene}_0"), [], logs, keep=True)
+        rows = {}
+        for strategy in STRATEGIES:
+            out = os.path.join(work, "removal", scene, strategy)
+            args = ["-m", "mi_voldis.bench.strategies", run["out"], strategy, out]
+            wall = child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
+            with open(os.path.join(out, "metrics.json")) as f:
+                rows[strategy] = {**json.load(f), "wall_seconds": wall, "out": out,
+                                  "command": "python " + " ".join(args)}
+        run.pop("curve", None)
+        results["scenes"][scene] = {"fit": run, "strategies": rows}
+    results["seconds"] = time.perf_counter() - t0
+    os.makedirs(report_dir, exist_ok=True)
+    with open(os.path.join(report_dir, "removal.json"), "w") as f:
+        json.dump(results, f, indent=1, default=float)
+    return results
+
+
+# ------------------------------------------------------------------------------------ 5. accuracy
 def task(run, name, extra, log_dir):
     args = ["scripts/optimize.py", run, "--task", name, "--quiet"] + extra
     seconds = child(args, os.path.join(log_dir, f"{os.path.basename(run)}_{name}.log"))
@@ -157,7 +192,7 @@ def run_all(quick, work, report_dir, scenes=None):
                           for occ in (False, True)]
     fits = {}
     datasets = {scene: make_data(scene, os.path.join(work, "data", scene), logs, quick)
-                for scene in (SCENES[:1] if quick else SCENES + [f"random{k}" for k in RANDOM_SEEDS])
+                for scene in (SCENES[:1] if quick else SCENES)
                 if not scenes or scene in scenes}
     if not quick:
         datasets.update({c: os.path.join(SHARED, c) for c in CAPTURES if os.path.isdir(os.path.join(SHARED, c))})
@@ -176,9 +211,6 @@ def run_all(quick, work, report_dir, scenes=None):
         report_dir, f"{scene}_offpath.png"))) for scene, path in datasets.items()}
     tasks = {}
     runs = {scene: fits[f"{scene}: default"]["out"] for scene in ("tabletop", "statue") if f"{scene}: default" in fits}
-    for scene in datasets:
-        if scene.startswith("random"):  # removal against ground truth on every random scene
-            tasks[scene] = {"removal": task(fits[f"{scene}: default"]["out"], "removal", [], logs)}
     for scene, run in runs.items():
         steps = ["--steps", "60"] if quick else []
         tasks[scene] = {

@@ -1,10 +1,11 @@
-"""The background of the ``refit`` strategy: the object's visual hull inpainted from around it,
-refitted on rays near the masks, and its colour cleared where nothing reads it."""
+"""How the background field starts from the full one: the object's visual hull cleared (``clear``,
+``lift``) or inpainted from around it (``harmonic``), before the refit on rays near the masks; and its
+colour cleared where nothing reads it."""
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..bricks import EMPTY_COLOR
+from ..bricks import EMPTY_COLOR, EMPTY_DENSITY
 from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, neighbour_vertices, vertex_positions
 from ..metrics import dilate
 from .hull import visual_hull
@@ -24,7 +25,39 @@ def hull_region(inputs, field, neighbours):
     return dr.select(grown, 1.0, 0.0), pts_scene[np.array(grown)]
 
 
-def start_background(inputs, state):
+def start_cleared(inputs, state):
+    """Background = full field with the object's visual hull emptied (no density, black): nothing of the
+    object survives, and L_bg then refits what some view sees of the hull."""
+    full = state.fields["full"]
+    hull, points = hull_region(inputs, full, neighbour_vertices(full))
+    state.fields["bg"] = emptied(inputs, full, hull > 0)
+    state.hull_points = points
+
+
+def emptied(inputs, field, region):
+    """``field`` with the vertices of ``region`` (Bool per stored vertex) empty: the initial density of
+    an unfitted field, and black."""
+    raw = density_raw_for_alpha(inputs.cfg.density_init_alpha, voxel_of(field) * inputs.cfg.step_voxels,
+                                field.density_scale)
+    channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
+    inside = dr.repeat(region, field.width)
+    values = dr.select(inside & (channel == 0), raw,
+                       dr.select(inside & (channel > 0) & (channel < field.channels), EMPTY_COLOR, field.data))
+    return FieldState(field.layout, values, field.channels, field.to_world.copy(), field.density_scale)
+
+
+def never_seen(inputs, field):
+    """Bool per stored vertex of ``field``: inside the object mask of every training view that sees it
+    (the undilated, strict visual hull): no view's unmasked pixels observe it."""
+    ds = inputs.ds
+    pts_scene, real = vertex_positions(field)
+    inside = np.zeros(len(pts_scene), bool)
+    inside[real] = visual_hull(inputs.space.to_world_np(pts_scene[real]), [ds.cameras[v] for v in ds.train],
+                               ds.masks[ds.train], 0, 1.0)
+    return mi.Bool(inside)
+
+
+def start_harmonic(inputs, state):
     """Background = full field with the object's visual hull inpainted from around it: a harmonic
     extension of density and colour, so surfaces the object hides (the floor under it) continue
     through the hull, except in the object's own dense voxels (full-field opacity per voxel above
@@ -65,16 +98,21 @@ def background_ray_pool(ds, bank, dilation):
     return np.flatnonzero(near.reshape(-1)).astype(np.uint32)
 
 
-def clear_empty_background_color(inputs, state):
+def clear_empty_background_color(inputs, state, region=None):
     """Set background colour to black at vertices that no visible background sample reads: those
     whose voxel opacity is below ``empty_color_alpha`` and whose neighbours (which share trilinear
-    cells with them) are all below it too. Returns the fraction of stored vertices cleared."""
+    cells with them) are all below it too; inside ``region`` (Bool per stored vertex: the cleared
+    hull) their density is emptied as well, so that the faint black left there does not add up to a
+    smudge along the rays that cross it. Returns the fraction of stored vertices cleared."""
     bg = state.fields["bg"]
     threshold = density_raw_for_alpha(inputs.cfg.empty_color_alpha, voxel_of(bg), bg.density_scale)
     raw = dr.gather(mi.Float, bg.data, dr.arange(mi.UInt32, bg.vertices) * bg.width)
     empty = ~dilate_vertices(raw >= threshold, neighbour_vertices(bg))
     channel = dr.arange(mi.UInt32, dr.width(bg.data)) % bg.width
-    values = dr.select(dr.repeat(empty, bg.width) & (channel > 0) & (channel < bg.channels), EMPTY_COLOR, bg.data)
+    vertex_empty = dr.repeat(empty, bg.width)
+    values = dr.select(vertex_empty & (channel > 0) & (channel < bg.channels), EMPTY_COLOR, bg.data)
+    if region is not None:
+        values = dr.select(vertex_empty & dr.repeat(region, bg.width) & (channel == 0), EMPTY_DENSITY, values)
     state.fields["bg"] = FieldState(bg.layout, values, bg.channels, bg.to_world, bg.density_scale)
     return float(dr.mean(mi.Float(empty))[0])
 

@@ -75,7 +75,7 @@ class FitConfig(Settings):
     resolution_schedule: list | None = setting(None, "explicit [[step, vertices along the box's longest side], "
                                                      "...] (null: derived from the settings above)",
                                                check=_schedule_error)
-    steps_bg: int = setting(150, "steps of the background refit (bg_strategy 'refit')", low=0)
+    steps_bg: int = setting(150, "steps of the background refit (every bg_strategy but 'scratch')", low=0)
     batch_rays: int = setting(8192, "random rays per step, drawn across all training views", low=1)
     batch_tile: int = setting(1, "> 1: rays in tile x tile pixel tiles (coherent: faster marches, worse "
                                  "fits per second)", low=1)
@@ -131,8 +131,12 @@ class FitConfig(Settings):
                                              "lower", low=0, high=1)
 
     # ---- background
-    bg_strategy: str = setting("refit", "'refit': from the full field, hull cleared; 'scratch': jointly",
-                               choices=("refit", "scratch"))
+    bg_strategy: str = setting("harmonic", "'lift': from the full field, hull emptied and refitted, what no view "
+                                       "sees lifted from a 2D inpainting; 'clear': the same without the lifted "
+                                       "prior; 'harmonic': hull inpainted harmonically, then refitted; 'scratch': "
+                                       "both fields jointly", choices=("lift", "clear", "harmonic", "scratch"))
+    prior_inpainter: str = setting("membrane", "2D inpainter of the reference view: 'telea' or 'ns' (OpenCV), "
+                                                 "'membrane' (harmonic)", choices=("telea", "ns", "membrane"))
     hull_dilation: float = setting(0.03, "mask dilation for the visual hull, fraction of image diagonal",
                                    low=0, high=1)
     hull_min_views: float = setting(0.9, "a cell is in the hull if inside the dilated mask in this fraction of "
@@ -140,7 +144,7 @@ class FitConfig(Settings):
     bg_ray_dilation: float = setting(0.15, "refit rays come from masks dilated by this fraction of the "
                                            "diagonal", low=0, high=1)
     object_alpha: float = setting(0.5, "hull voxels this opaque in the full field are the object: emptied "
-                                       "in bg", above=0, high=1)
+                                       "in bg (bg_strategy 'harmonic')", above=0, high=1)
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)

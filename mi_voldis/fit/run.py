@@ -23,10 +23,12 @@ PREVIEW = "previews"
 CHECKPOINT = os.path.join("checkpoints", "last.npz")
 
 
-def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto", holdout=8):
-    """Fit the dataset at ``dataset_path`` into the run folder ``out``; returns the metrics."""
+def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto", holdout=8, keep_checkpoints=False):
+    """Fit the dataset at ``dataset_path`` into the run folder ``out``; returns the metrics.
+    ``keep_checkpoints``: the finished run keeps ``checkpoints/last.npz`` (its final state, from which
+    :mod:`mi_voldis.bench.strategies` refits the background another way)."""
     cfg = cfg or FitConfig()
-    with staged(out, resume) as stage:
+    with staged(out, resume, keep_checkpoints) as stage:
         dataset = load_dataset(dataset_path, fmt, holdout)
         record = {"path": os.path.abspath(dataset_path), "format": dataset.meta["format"], "holdout": holdout}
         write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": record})
@@ -70,7 +72,7 @@ def write_run(stage, inputs, state, fit_seconds):
         "box": {"kind": inputs.box.kind, "lo": state.lo.tolist(), "hi": state.hi.tolist()},
         "occupied_fraction": integrator.occupancy.fraction if integrator.occupancy is not None else None,
         "empty_bg_color_fraction": state.empty_color_fraction,
-        "bg_strategy": cfg.bg_strategy,
+        "bg_strategy": cfg.bg_strategy, "bg_prior": state.prior,
     }
     write_json(os.path.join(stage, "metrics.json"), metrics)
     write_json(os.path.join(stage, "log.json"), state.log)

@@ -42,9 +42,11 @@ class FitState:
     plan: dict | None = None  # minutes, capture / affordable / final resolution, seconds per coarse step
     occupancy: object = None  # the skipping grid in use (mi_voldis.render.occupancy.Occupancy), or None
     occupancy_phase: int | None = None  # the phase that built it: a resumed phase takes it back unchanged
+    prior: dict | None = None  # what the lifted background prior did (mi_voldis.fit.lift.lift_prior)
+    prior_keys: np.ndarray | None = None  # lattice keys of the background vertices it changed
 
     META = ("phase", "step", "occupancy_on", "log", "phase_times", "sh_choice", "empty_color_fraction", "schedule",
-            "steps_full", "plan", "occupancy_phase")
+            "steps_full", "plan", "occupancy_phase", "prior")
 
     def save(self, path, phase, step):
         """Checkpoint at ``phase``/``step`` (atomically replaces ``path``)."""
@@ -64,6 +66,8 @@ class FitState:
         arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
         if self.hull_points is not None:
             arrays["hull_points"] = self.hull_points
+        if self.prior_keys is not None:
+            arrays["prior_keys"] = self.prior_keys
         if self.exposure is not None:
             arrays["exposure"] = np.array(self.exposure)
         if self.occupancy is not None:
@@ -91,4 +95,5 @@ class FitState:
         occupancy = Occupancy(arrays["occupancy/lo"], arrays["occupancy/hi"], arrays["occupancy/cells"],
                               float(arrays["occupancy/reach"])) if "occupancy/cells" in arrays else None
         return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields, hull_points=arrays.get("hull_points"),
+                   prior_keys=arrays.get("prior_keys"),
                    exposure=exposure, occupancy=occupancy, **{key: meta.get(key) for key in cls.META})

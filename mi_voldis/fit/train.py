@@ -8,10 +8,16 @@ reverse-mode AD, with Adam on raw voxel grids.
 
 Phases (``bg_strategy``):
 
-* ``refit`` (default): fit the full field; then the background starts as a copy of it, the
-  object's visual hull (from the masks) is cleared, and only hull cells are refitted with L_bg on
-  rays near the masks. Outside the hull the two fields are identical, so the foreground
-  w_full - w_bg is exactly zero there.
+* ``harmonic`` (default): fit the full field; the background starts as a copy of it with the object's
+  visual hull (from the masks) filled with the harmonic extension of the field around it, the
+  object's own dense voxels emptied (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull
+  cells are refitted with L_bg on rays near the masks. Outside the hull the two fields are identical,
+  so the foreground w_full - w_bg is exactly zero there.
+* ``lift``: the same full field; the background starts as a copy of it with the object's
+  visual hull (from the masks) emptied, only hull cells are refitted with L_bg on rays near the masks
+  (what other views see), and what no view sees is filled from a reference view's 2D inpainting
+  lifted into 3D (:mod:`mi_voldis.fit.lift`), after emptying what only the object can occupy.
+* ``clear``: the hull emptied and refitted, without the prior (the paper's masked loss alone).
 * ``scratch``: both fields from scratch, jointly, on the same rays (two layers of one march).
 
 Where the background has no density its colour is unconstrained, yet c_fg = c_full - c_bg reads it;
@@ -24,14 +30,23 @@ import drjit as dr
 import numpy as np
 
 from .. import exposure
-from ..field_state import FieldState
+from ..field_state import FieldState, density_raw_for_alpha, neighbour_vertices
 from ..metrics import psnr
 from ..optim.adam import Adam
 from ..optim.loop import optimize
 from ..raybank import RayBank
 from ..render.views import render_camera
-from .background import background_ray_pool, background_regions, clear_empty_background_color, start_background
+from .background import (
+    background_ray_pool,
+    background_regions,
+    clear_empty_background_color,
+    hull_region,
+    start_cleared,
+    start_harmonic,
+    voxel_of,
+)
 from .fields import FitInputs, init_fields
+from .lift import keys_mask, lift_prior
 from .problem import FieldFit
 from .schedule import (
     RESERVED,
@@ -48,9 +63,10 @@ from .sh_degree import choose_sh_degree
 from .state import FitState
 
 
-def fit(dataset, checkpoint, cfg, resume=False, progress=True):
+def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     """Fit ``dataset``, checkpointing to the file ``checkpoint``. Returns the inputs and the final
-    :class:`FitState` (fields, log, phase times)."""
+    :class:`FitState` (fields, log, phase times). ``inpainter``: a 2D inpainter callable for the ``lift``
+    prior (:mod:`mi_voldis.inpaint2d`), instead of the one ``cfg.prior_inpainter`` names."""
     inputs = FitInputs.of(dataset, cfg, checkpoint, progress)
     adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
     state = FitState.load(checkpoint, adam) if resume else None
@@ -80,10 +96,21 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
 
     if state.phase == "bg" and has_masks and not scratch:
         t0 = time.perf_counter()
+        harmonic = cfg.bg_strategy == "harmonic"
         if "bg" not in state.fields or state.hull_points is None:
-            start_background(inputs, state)
-        hull, _, obj = background_regions(inputs, state)
-        free = dr.select(obj, 0.0, hull)  # refit the hull but the object's own voxels, which stay empty
+            (start_harmonic if harmonic else start_cleared)(inputs, state)
+            if cfg.bg_strategy == "lift":
+                full = state.fields["full"]
+                empty = density_raw_for_alpha(cfg.density_init_alpha, voxel_of(full) * cfg.step_voxels,
+                                              full.density_scale)
+                state.prior, state.prior_keys = lift_prior(
+                    inputs, state, lambda f: hull_region(inputs, f, neighbour_vertices(f))[0], empty,
+                    fill=inpainter or cfg.prior_inpainter)
+        if harmonic:  # the object's own voxels stay empty
+            hull, _, obj = background_regions(inputs, state)
+            free = dr.select(obj, 0.0, hull)
+        else:  # on the background's lattice (the lifted prior may have allocated bricks)
+            free = cleared_region(inputs, state)
         pool = background_ray_pool(dataset, inputs.bank, cfg.bg_ray_dilation)
         problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
                            schedule=False)
@@ -96,9 +123,21 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True):
         full = state.fields["full"]
         state.fields["bg"] = FieldState(full.layout, full.data, full.channels, full.to_world.copy(), full.density_scale)
     if has_masks:
-        state.empty_color_fraction = clear_empty_background_color(inputs, state)
+        cleared = cleared_region(inputs, state) > 0 if cfg.bg_strategy in ("clear", "lift") else None
+        state.empty_color_fraction = clear_empty_background_color(inputs, state, cleared)
     state.save(checkpoint, "done", 0)
     return inputs, state
+
+
+def cleared_region(inputs, state):
+    """Float per stored background vertex, 1 where ``clear`` / ``lift`` changed the background: the
+    object's hull (on the background's lattice: the lifted prior may have allocated bricks) and the
+    vertices the prior emptied or wrote."""
+    bg = state.fields["bg"]
+    hull = hull_region(inputs, bg, neighbour_vertices(bg))[0]
+    if state.prior_keys is None or not len(state.prior_keys):
+        return hull
+    return dr.select(keys_mask(bg, state.prior_keys), 1.0, hull)
 
 
 def fit_full(inputs, state, roles, scratch, checkpoint):

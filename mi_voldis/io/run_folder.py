@@ -45,11 +45,12 @@ def check_output(out, resume=False, min_free=MIN_FREE_BYTES):
 
 
 @contextlib.contextmanager
-def staged(out, resume=False):
+def staged(out, resume=False, keep_checkpoints=False):
     """``with staged(OUT, resume) as stage:`` write everything into ``stage``; on leaving the block
     without an exception it replaces ``OUT``. ``resume``: continue an existing ``OUT.partial``.
     A failed job leaves ``OUT`` as it was, and its ``OUT.partial`` only if it holds a checkpoint to
-    resume from; a finished one drops its ``checkpoints/`` (what it made is written beside them)."""
+    resume from; a finished one drops its ``checkpoints/`` (what it made is written beside them)
+    unless ``keep_checkpoints``."""
     check_output(out, resume)
     stage = staging(out)
     if not resume:
@@ -62,7 +63,8 @@ def staged(out, resume=False):
             shutil.rmtree(stage, ignore_errors=True)
         raise
     commit(stage, out)
-    shutil.rmtree(os.path.join(out, CHECKPOINTS), ignore_errors=True)
+    if not keep_checkpoints:
+        shutil.rmtree(os.path.join(out, CHECKPOINTS), ignore_errors=True)
 
 
 def _has_checkpoint(stage):

@@ -11,15 +11,8 @@ reason to agree with itself across views; a volume does by construction).
 import numpy as np
 
 from ..cameras import pixel_rays, project
+from ..inpaint2d import opencv_inpaint
 from ..metrics import dilate, object_residue, psnr, ssim
-
-
-def opencv_inpaint(image, mask, method):
-    import cv2
-    flag = {"telea": cv2.INPAINT_TELEA, "ns": cv2.INPAINT_NS}[method]
-    img8 = np.round(np.clip(image, 0, 1) * 255).astype(np.uint8)
-    out = cv2.inpaint(img8, mask.astype(np.uint8) * 255, 5, flag)
-    return out.astype(np.float32) / 255.0
 
 
 def reproject(image_a, depth_a, cam_a, cam_b):
@@ -33,6 +26,24 @@ def reproject(image_a, depth_a, cam_a, cam_b):
     out = np.full((cam_b.height, cam_b.width, 3), np.nan, np.float32)
     out[v[ok].astype(int), u[ok].astype(int)] = image_a.reshape(-1, 3)[ok]
     return out
+
+
+def consistency(ds, views, images, depth, dil):
+    """Mean PSNR of each of ``views``' inpainting (``images[v]``) warped with ``depth[v]`` into its nearest
+    other view of ``views`` and compared there inside that view's mask (dilated by ``dil`` pixels);
+    None with fewer than two views."""
+    values = []
+    for v in views:
+        others = [u for u in views if u != v]
+        if not others:
+            continue
+        pos = np.array([ds.cameras[u].to_world[:3, 3] for u in others])
+        u = others[int(np.argmin(np.linalg.norm(pos - ds.cameras[v].to_world[:3, 3], axis=1)))]
+        warped = reproject(images[v], depth[v], ds.cameras[v], ds.cameras[u])
+        region = dilate(ds.masks[u], dil) & np.isfinite(warped).all(axis=-1)
+        if region.any():
+            values.append(psnr(warped[region], images[u][region]))
+    return float(np.mean(values)) if values else None
 
 
 def run(run, output, progress=True):
@@ -54,9 +65,8 @@ def run(run, output, progress=True):
         depth[v] = renders[v]["bg"][2]
     rows = {}
     for name, images in methods.items():
-        row = {"psnr_mask": [], "ssim_mask": [], "psnr": [], "consistency_psnr": [], "residue": []}
-        tests = list(ds.test)
-        for k, v in enumerate(tests):
+        row = {"psnr_mask": [], "ssim_mask": [], "psnr": [], "residue": []}
+        for v in ds.test:
             region = dilate(ds.masks[v], dil)
             if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all():
                 gt = ds.backgrounds[v]
@@ -66,14 +76,7 @@ def run(run, output, progress=True):
                 residue = object_residue(images[v], ds.images[v], gt, ds.masks[v])
                 if np.isfinite(residue):
                     row["residue"].append(residue)
-            if len(tests) > 1:  # consistency with the nearest other held-out view
-                others = [u for u in tests if u != v]
-                pos = np.array([ds.cameras[u].to_world[:3, 3] for u in others])
-                u = others[int(np.argmin(np.linalg.norm(pos - ds.cameras[v].to_world[:3, 3], axis=1)))]
-                warped = reproject(images[v], depth[v], ds.cameras[v], ds.cameras[u])
-                target_region = dilate(ds.masks[u], dil) & np.isfinite(warped).all(axis=-1)
-                if target_region.any():
-                    row["consistency_psnr"].append(psnr(warped[target_region], images[u][target_region]))
         rows[name] = {k: float(np.mean(vals)) if vals else None for k, vals in row.items()}
+        rows[name]["consistency_psnr"] = consistency(ds, list(ds.test), images, depth, dil)
     output.finish({"task": "removal", "methods": rows,
                    "note": f"in-mask = inside the masks dilated by {100 * dilation:g}% of the image diagonal"})

@@ -1,0 +1,89 @@
+"""Removal by background strategy, from one fitted full field (the benchmark's removal section).
+
+    python -m mi_voldis.bench.strategies RUN STRATEGY OUT
+
+RUN: a finished fit kept with ``--keep-checkpoints``; its final state's full field is reused, the
+background is fitted again with ``bg_strategy=STRATEGY`` (every other setting as RUN's config.json), and
+OUT receives ``metrics.json`` and the background of each held-out view as PNG. Scored on the held-out
+views against the ground-truth background (in-mask = masks dilated by ``hull_dilation``): PSNR inside
+the masks and outside them (beside the full field's outside them), the object's residue, the
+foreground coverage IoU and the view-to-view consistency; OpenCV's Telea and Navier-Stokes on each
+held-out view itself (they see the photo around the mask) beside them.
+"""
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+
+def evaluate(ds, integrator, dilation_fraction):
+    """Per-method rows (the volume's background, Telea, NS) and the volume's held-out renders."""
+    from ..inpaint2d import opencv_inpaint
+    from ..metrics import dilate, iou, object_residue, psnr
+    from ..render.views import render_camera
+    from ..tasks.removal import consistency
+    dil = int(np.ceil(dilation_fraction * np.hypot(*ds.size)))
+    tests = [v for v in ds.test if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all()]
+    renders = {v: render_camera(integrator, ds.cameras[v], ("full", "bg", "fg")) for v in tests}
+    images = {"volume": {v: np.clip(renders[v]["bg"][0], 0, 1) for v in tests},
+              "telea": {v: opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "telea") for v in tests},
+              "ns": {v: opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "ns") for v in tests}}
+    depth = {v: renders[v]["bg"][2] for v in tests}
+    rows = {}
+    for name, by_view in images.items():
+        r = {"psnr_mask": [], "psnr_outside": [], "residue": []}
+        for v in tests:
+            region, gt = dilate(ds.masks[v], dil), ds.backgrounds[v]
+            r["psnr_mask"].append(psnr(by_view[v], gt, region))
+            r["psnr_outside"].append(psnr(by_view[v], gt, ~region))
+            r["residue"].append(object_residue(by_view[v], ds.images[v], gt, ds.masks[v]))
+        rows[name] = {k: float(np.nanmean(x)) if x else None for k, x in r.items()}
+        rows[name]["consistency_psnr"] = consistency(ds, tests, by_view, depth, dil)
+    full_out = [psnr(np.clip(renders[v]["full"][0], 0, 1), ds.backgrounds[v], ~dilate(ds.masks[v], dil))
+                for v in tests]
+    rows["volume"]["full_psnr_outside"] = float(np.mean(full_out)) if full_out else None
+    truth = {v: ds.coverage[v] > 0.5 if ds.coverage is not None else ds.masks[v] for v in tests}
+    rows["volume"]["fg_coverage_iou"] = float(np.mean([iou(renders[v]["fg_coverage"] > 0.5, truth[v])
+                                                       for v in tests])) if tests else None
+    return rows, renders
+
+
+def main(argv=None):
+    run, strategy, out = (argv or sys.argv[1:])[:3]
+    from ..data import load_dataset
+    from ..fit.config import FitConfig
+    from ..fit.fields import fit_integrator
+    from ..fit.state import FitState
+    from ..fit.train import fit
+    from ..io.images import display_to_uint8, write_png
+    from ..io.run_folder import peak_rss_mib, write_json
+    from ..optim.adam import Adam
+    with open(os.path.join(run, "config.json")) as f:
+        record = json.load(f)["dataset"]
+    cfg = FitConfig.from_sources(os.path.join(run, "config.json"), [f'bg_strategy="{strategy}"'])
+    ds = load_dataset(record["path"], record["format"], record["holdout"])
+    os.makedirs(out, exist_ok=True)
+    adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
+    state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), adam)
+    if state is None:
+        raise SystemExit(f"error: {run}: no checkpoints/last.npz (fit it with --keep-checkpoints)")
+    state.fields.pop("bg", None)
+    state.hull_points = state.prior = state.prior_keys = state.occupancy = None
+    state.adam.reset()
+    checkpoint = os.path.join(out, "state.npz")
+    state.save(checkpoint, "bg", 0)
+    t0 = time.perf_counter()
+    inputs, state = fit(ds, checkpoint, cfg, resume=True, progress=False)
+    seconds = time.perf_counter() - t0
+    os.remove(checkpoint)
+    rows, renders = evaluate(ds, fit_integrator(inputs, state), cfg.hull_dilation)
+    for v, layers in renders.items():
+        write_png(os.path.join(out, f"view{v:03d}_bg.png"), display_to_uint8(np.clip(layers["bg"][0], 0, 1)))
+    write_json(os.path.join(out, "metrics.json"), {"strategy": strategy, "seconds": seconds, "methods": rows,
+                                                   "prior": state.prior, "peak_rss_mib": peak_rss_mib()})
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,221 @@
+"""A consistent prior for the background no view sees: inpaint one reference view in 2D, lift it into 3D.
+
+For a reference training view r, each masked pixel's ray is searched, from the object's front
+outwards, for the first point that another view sees unmasked (:mod:`mi_voldis.fit.visibility`): that
+point, with the colour those views observe there, is the background behind the object. The masked
+pixels where no view sees anything form the *hole*, inpainted in 2D (colour with an inpainter,
+:mod:`mi_voldis.inpaint2d`, from the photo and the observed colours around it; depth as disparity,
+continuing the surrounding surfaces). Every masked pixel then becomes a surface point X = o + t d with
+its colour, written into the background field as an opaque surface at the nearest lattice vertices,
+inside the object's visual hull only (outside it every vertex is constrained by some unmasked view).
+Every view sees one surface there, so the fill is consistent across views by construction; the refit
+with the masked loss then refines what views see.
+
+The reference view is, among the ``candidates`` views with the largest masks, the one with the largest
+hole (the most the prior must supply).
+"""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..activations import logit
+from ..bricks import EMPTY_COLOR
+from ..cameras import pixel_rays
+from ..device import from_numpy
+from ..field_state import FieldState, density_raw_for_alpha, resample
+from ..inpaint2d import fill_disparity, inpainter
+from ..metrics import dilate
+from ..render.views import render_camera
+from .fields import fit_integrator
+from .hull import visual_hull
+from .visibility import pixel_points, seen_elsewhere
+
+SURFACE_ALPHA = 0.99  # opacity of one voxel's length of a lifted surface
+VACANT_ALPHA = 0.01  # outside the hull, a lifted surface only goes where the field is this transparent
+
+
+def lattice_cells(field, space, points, halo=0):
+    """The lattice vertices (i, j, k) of the cell holding each world point, grown by ``halo`` vertices on
+    every side (int (n, (2 + 2 halo)^3, 3)), and whether the cell lies in the lattice."""
+    scene = space.from_world_np(points)
+    m = field.to_world
+    local = (scene - m[:3, 3]) / np.diag(m)[:3]
+    base = np.floor(local * (np.array(field.shape) - 1)).astype(np.int64)
+    r = np.arange(-halo, 2 + halo)
+    corners = np.stack(np.meshgrid(r, r, r, indexing="ij"), -1).reshape(-1, 3)
+    ijk = np.clip(base[:, None, :] + corners[None], 0, np.array(field.shape) - 1)
+    ok = np.all((base >= 0) & (base + 1 < np.array(field.shape)), axis=1)
+    return ijk, ok
+
+
+def write_surface(field, space, points, colors, allowed):
+    """``field`` with an opaque surface (``SURFACE_ALPHA`` per voxel) of display colours ``colors`` at the
+    corners of the cells holding world ``points`` (so that no ray slips between written vertices), and
+    the colour alone one vertex further (colour is interpolated before its activation: a black neighbour
+    would darken the surface's edges), where ``allowed(field)`` (Float per stored vertex) is > 0 (the
+    cleared hull) or where the field is nearly empty (``VACANT_ALPHA``: a region few views see, which the
+    field left empty): anything denser outside the hull is an observed surface and stays. Bricks
+    the points need are allocated first. Returns the new field and the written lattice keys."""
+    voxel = float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
+    surface = density_raw_for_alpha(SURFACE_ALPHA, voxel, field.density_scale)
+    vacant = density_raw_for_alpha(VACANT_ALPHA, voxel, field.density_scale)
+    for halo in (1, 0):  # the colour's halo first, then the surface over it
+        ijk, ok = lattice_cells(field, space, points, halo)
+        n = ijk.shape[1]
+        ijk, rgb = ijk[ok].reshape(-1, 3), np.repeat(colors[ok], n, axis=0)
+        s = field.layout.shift
+        need = np.zeros(field.layout.table.shape, bool)
+        need[ijk[:, 2] >> s, ijk[:, 1] >> s, ijk[:, 0] >> s] = True
+        if (need & (field.layout.table == 0)).any():
+            field = resample(field, None, need | (field.layout.table > 0))
+        x, y, _ = field.shape
+        keys, inverse = np.unique((ijk[:, 2] * y + ijk[:, 1]) * x + ijk[:, 0], return_inverse=True)
+        inverse = inverse.reshape(-1)
+        mean = np.zeros((len(keys), 3))
+        np.add.at(mean, inverse, rgb)
+        mean /= np.bincount(inverse, minlength=len(keys))[:, None]
+        k, rest = np.divmod(keys, x * y)
+        j, i = np.divmod(rest, x)
+        address = field.layout.address(*(from_numpy(mi.UInt32, a.astype(np.uint32)) for a in (i, j, k)))
+        inside = np.array((dr.gather(mi.Float, allowed(field), address) > 0) |
+                          (dr.gather(mi.Float, field.data, address * field.width) < vacant))
+        address = dr.gather(mi.UInt32, address, from_numpy(mi.UInt32, np.flatnonzero(inside).astype(np.uint32)))
+        mean, keys = mean[inside], keys[inside]
+        data = dr.copy(field.data)
+        w = field.width
+        if halo == 0:
+            dr.scatter(data, surface, address * w)
+        raw = logit(mean).astype(np.float32)
+        for c in range(1, field.channels):  # the DC term carries the colour, higher orders none
+            value = from_numpy(mi.Float, raw[:, c - 1]) if c <= 3 else mi.Float(0.0)
+            dr.scatter(data, value, address * w + c)
+        dr.eval(data)
+        field = FieldState(field.layout, data, field.channels, field.to_world, field.density_scale)
+    return field, keys
+
+
+def ray_keys(field, space, camera, pixels, t_end, keep=None, chunk=1 << 21):
+    """Lattice keys of every vertex of ``field`` nearest to the rays of flat ``pixels`` of ``camera``,
+    from the camera to ``t_end`` (per pixel, along the ray), sampled every half voxel of scene space;
+    ``keep(world points) -> Bool``: which of those vertices count (default: all)."""
+    pixels = np.asarray(pixels)
+    if not len(pixels):
+        return np.zeros(0, np.int64)
+    py, px = np.divmod(pixels, camera.width)
+    o, d = pixel_rays(camera, px + 0.5, py + 0.5)
+    m = field.to_world
+    voxel = float(np.max(np.diag(m)[:3] / (np.array(field.shape) - 1)))
+    length = np.linalg.norm(space.from_world_np(o + t_end[:, None] * d) - space.from_world_np(o), axis=1)
+    n = int(np.clip(np.ceil(length.max() / (0.5 * voxel)), 2, 4096))
+    x, y, _ = field.shape
+    keys = []
+    rows = max(1, chunk // n)
+    for a in range(0, len(pixels), rows):
+        f = np.linspace(0.0, 1.0, n)[None, :, None]
+        pts = o[a:a + rows, None] + f * (t_end[a:a + rows, None, None] * d[a:a + rows, None])
+        scene = space.from_world_np(pts.reshape(-1, 3))
+        ijk = np.round((scene - m[:3, 3]) / np.diag(m)[:3] * (np.array(field.shape) - 1)).astype(np.int64)
+        ijk = ijk[np.all((ijk >= 0) & (ijk < np.array(field.shape)), axis=1)]
+        keys.append(np.unique((ijk[:, 2] * y + ijk[:, 1]) * x + ijk[:, 0]))
+    keys = np.unique(np.concatenate(keys))
+    if keep is not None and len(keys):
+        k, rest = np.divmod(keys, x * y)
+        j, i = np.divmod(rest, x)
+        local = np.stack([i, j, k], -1) / (np.array(field.shape) - 1)
+        keys = keys[keep(space.to_world_np(local * np.diag(m)[:3] + m[:3, 3]))]
+    return keys
+
+
+def object_ray_keys(inputs, field, views, depth, dilation=0.01, reach=0.9, fraction=0.5):
+    """Lattice keys of the vertices of ``field`` that only the object can occupy: on the masked rays
+    (masks grown by ``dilation`` of the diagonal: edge pixels are partly the object) of ``views`` (full
+    field depth maps ``depth[view]``), from the camera to ``reach`` times the background's depth there
+    (the disparity fill of the depth around the mask), and inside the grown masks of at least
+    ``fraction`` of the training views that see them (what most views see stays). On a masked ray
+    nothing but the object stands in front of the background, so whatever the full field holds there
+    that is not the background's is the object's, wherever the visual hull ends."""
+    ds = inputs.ds
+    grow = int(np.ceil(dilation * np.hypot(*ds.size)))
+    cams, masks = [ds.cameras[u] for u in ds.train], ds.masks[ds.train]
+
+    def objectish(points):
+        return visual_hull(points, cams, masks, grow, fraction)
+
+    keys = [np.zeros(0, np.int64)]
+    for u in views:
+        region = dilate(ds.masks[u], grow)
+        pixels = np.flatnonzero(region)
+        behind = fill_disparity(depth[u], region).reshape(-1)[pixels]
+        keys.append(ray_keys(field, inputs.space, ds.cameras[u], pixels, reach * behind, objectish))
+    return np.unique(np.concatenate(keys))
+
+
+def empty_keys(field, keys, empty_raw):
+    """``field`` with the vertices of lattice ``keys`` emptied (raw density ``empty_raw``, black)."""
+    inside = dr.repeat(keys_mask(field, keys), field.width)
+    channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
+    data = dr.select(inside & (channel == 0), empty_raw,
+                     dr.select(inside & (channel > 0) & (channel < field.channels), EMPTY_COLOR, field.data))
+    dr.eval(data)
+    return FieldState(field.layout, data, field.channels, field.to_world, field.density_scale)
+
+
+def training_depths(inputs, state, count=24, extra=()):
+    """Full-field depth maps of ``count`` training views spread over the set (and of ``extra``)."""
+    ds = inputs.ds
+    train = list(ds.train)
+    pick = np.unique(np.linspace(0, len(train) - 1, min(count, len(train))).round().astype(int))
+    views = sorted(set(train[k] for k in pick) | set(extra))
+    integrator = fit_integrator(inputs, state)
+    return {u: render_camera(integrator, ds.cameras[u], ("full",))["full"][2] for u in views}
+
+
+def keys_mask(field, keys):
+    """Bool per stored vertex of ``field``: its lattice key ((k Y + j) X + i) is among ``keys``."""
+    coords, inside = field.layout.vertex_coords()
+    x, y, _ = field.shape
+    own = (coords[:, 2] * y + coords[:, 1]) * x + coords[:, 0]
+    return from_numpy(mi.Bool, inside & np.isin(own, keys))
+
+
+def lift_pixels(camera, region, depth, colors, subpixels=2):
+    """World points and colours of a view's ``region`` pixels (``depth`` along the rays, ``colors``
+    (H, W, 3)), ``subpixels``^2 rays per pixel so that the points leave no gap between lattice vertices."""
+    py, px = np.nonzero(region)
+    offsets = (np.arange(subpixels) + 0.5) / subpixels
+    ox, oy = np.meshgrid(offsets, offsets)
+    sx = (px[:, None] + ox.reshape(1, -1)).reshape(-1)
+    sy = (py[:, None] + oy.reshape(1, -1)).reshape(-1)
+    o, d = pixel_rays(camera, sx, sy)
+    t = np.repeat(depth[py, px], subpixels ** 2)
+    return o + t[:, None] * d, np.repeat(colors[py, px], subpixels ** 2, axis=0)
+
+
+def lift_prior(inputs, state, allowed, empty_raw, fill="telea", dilation=0.01, tol=0.03):
+    """Empty the vertices only the object can occupy (:func:`object_ray_keys`) and write the lifted 2D
+    inpainting of the reference view into ``state.fields['bg']`` (see the module docstring);
+    ``allowed(field)``: Float per stored vertex, > 0 where writing is allowed (the cleared hull);
+    ``dilation``: of the reference mask, a fraction of the image diagonal (edge pixels mix the object's
+    colour in). Returns a summary (the reference view, its hole pixels, the vertices emptied and
+    written, the fraction of the lifted points another view sees unmasked,
+    :mod:`mi_voldis.fit.visibility`) and the lattice keys of every vertex changed."""
+    ds = inputs.ds
+    train = list(ds.train)
+    area = np.array([ds.masks[v].sum() for v in train])
+    if not area.any():
+        return {"reference_view": None}, np.zeros(0, np.int64)
+    v = train[int(np.argmax(area))]
+    depth = training_depths(inputs, state, extra=(v,))
+    carved = object_ray_keys(inputs, state.fields["bg"], depth, depth, dilation)
+    state.fields["bg"] = empty_keys(state.fields["bg"], carved, empty_raw)
+    hole = dilate(ds.masks[v], int(np.ceil(dilation * np.hypot(*ds.size))))
+    colors = inpainter(fill)(np.clip(ds.images[v], 0, 1), hole)
+    filled = fill_disparity(depth[v], hole)
+    points, point_rgb = lift_pixels(ds.cameras[v], hole, filled, np.clip(colors, 0, 1))
+    state.fields["bg"], written = write_surface(state.fields["bg"], inputs.space, points, point_rgb, allowed)
+    others = [u for u in depth if u != v]
+    seen = seen_elsewhere(pixel_points(ds.cameras[v], filled, np.flatnonzero(hole)), [ds.cameras[u] for u in others],
+                          [depth[u] for u in others], [ds.masks[u] for u in others], tol=tol)
+    summary = {"reference_view": int(v), "hole_pixels": int(hole.sum()), "vertices_emptied": int(len(carved)),
+               "vertices_written": int(len(written)), "seen_elsewhere": float(seen.mean()) if len(seen) else None}
+    return summary, np.union1d(carved, written)

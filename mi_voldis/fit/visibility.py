@@ -1,0 +1,43 @@
+"""Which background points behind the object some other training view sees, unmasked.
+
+A world point X is *seen* from view j when it projects into view j's image outside its object mask and
+nothing stands in front of it there: the full field's depth at that pixel reaches X (relative
+tolerance ``tol``). What some view sees is what the paper's masked loss can reconstruct; the rest
+needs a prior (:mod:`mi_voldis.fit.lift`).
+"""
+import numpy as np
+
+from ..cameras import pixel_rays, project
+
+
+def seen_elsewhere(points, cameras, depths, masks, images=None, tol=0.03):
+    """Bool per world point (n, 3): seen unmasked by some camera of ``cameras``, given each camera's
+    full-field depth map ``depths[j]`` (distance along its rays) and mask ``masks[j]``; with ``images``,
+    also the mean colour of the pixels that see each point (n, 3) (NaN where none does)."""
+    points = np.asarray(points, np.float64)
+    seen = np.zeros(len(points), bool)
+    total = np.zeros((len(points), 3)) if images is not None else None
+    count = np.zeros(len(points))
+    for j, (cam, depth, mask) in enumerate(zip(cameras, depths, masks)):
+        px, py, z = project(cam, points)
+        ix, iy = np.floor(px).astype(np.int64), np.floor(py).astype(np.int64)
+        ok = (z > 0) & (ix >= 0) & (ix < cam.width) & (iy >= 0) & (iy < cam.height)
+        ok[ok] &= ~mask[iy[ok], ix[ok]]
+        dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
+        ok[ok] &= np.abs(depth[iy[ok], ix[ok]] - dist[ok]) <= tol * dist[ok]
+        seen |= ok
+        if images is not None:
+            total[ok] += images[j][iy[ok], ix[ok]]
+            count[ok] += 1
+    if images is None:
+        return seen
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return seen, total / count[:, None]
+
+
+def pixel_points(camera, depth, pixels):
+    """World points (n, 3) of a depth map (H, W, distance along each pixel-centre ray) at flat pixel
+    indices ``pixels``."""
+    py, px = np.divmod(np.asarray(pixels), camera.width)
+    o, d = pixel_rays(camera, px + 0.5, py + 0.5)
+    return o + depth.reshape(-1)[pixels, None] * d
