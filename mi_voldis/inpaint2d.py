@@ -2,15 +2,18 @@
 
 An *inpainter* is any callable ``(image (H, W, 3) float in [0, 1], hole (H, W) bool) -> (H, W, 3)``
 that replaces the hole's pixels; :data:`INPAINTERS` names the built-in ones (OpenCV's Telea and
-Navier-Stokes, and the harmonic membrane). A learned inpainter (LaMa and the like) plugs in through the same signature.
+Navier-Stokes, and the harmonic membrane). A learned inpainter (LaMa and the like) plugs in through
+the same signature.
 
-Depth is filled as disparity q = 1 / depth: on a plane, q is an affine function of the pixel
-coordinates (for a pinhole camera, n . X = c along the ray X = o + t d makes 1/t linear in d, and d is
-projectively linear in (x, y)), so a robust affine fit to the ring around the hole plus a harmonic
-(Laplace) fill of what the plane does not explain continues planes exactly and other surfaces smoothly.
+Depth is filled as disparity q = 1 / z (z: depth along the optical axis): on a plane, q is an affine
+function of the pixel coordinates (a point X = z (x', y', 1) in the camera frame, x' and y' affine in
+the pixel coordinates, lies on n . X = c exactly when 1 / z = n . (x', y', 1) / c), so a robust
+affine fit to the ring around the hole plus a harmonic (Laplace) fill of what the plane does not
+explain continues planes exactly and other surfaces smoothly.
 """
 import numpy as np
 
+from .cameras import pixel_rays
 from .metrics import dilate
 
 
@@ -44,14 +47,23 @@ def inpainter(name_or_callable):
     return INPAINTERS[name_or_callable]
 
 
-def harmonic_fill(values, hole, iterations=200):
+def harmonic_fill(values, hole, iterations=3000, tol=1e-6):
     """``values`` (H, W) with the ``hole`` pixels replaced by the solution of Laplace's equation whose
-    boundary values are the known pixels around them (Neumann at the image border). Solved coarse to
-    fine: each level starts from the half-resolution solution, then relaxes with Jacobi steps."""
+    boundary values are the known pixels around them (Neumann at the image border). Solved on the
+    hole's bounding box, coarse to fine: each level starts from the half-resolution solution, then
+    relaxes with Jacobi steps until no pixel moves by ``tol`` (relative to the data's range)."""
     v = np.where(hole, 0.0, values).astype(np.float64)
     hole = np.asarray(hole, bool)
     if not hole.any():
         return v
+    ys, xs = np.nonzero(hole)
+    y0, y1 = max(ys.min() - 1, 0), min(ys.max() + 2, hole.shape[0])
+    x0, x1 = max(xs.min() - 1, 0), min(xs.max() + 2, hole.shape[1])
+    v[y0:y1, x0:x1] = _harmonic(v[y0:y1, x0:x1], hole[y0:y1, x0:x1], iterations, tol)
+    return v
+
+
+def _harmonic(v, hole, iterations, tol):
     h, w = hole.shape
     if min(h, w) >= 8 and hole.sum() > 64:
         hh, ww = (h + 1) // 2, (w + 1) // 2
@@ -61,27 +73,43 @@ def harmonic_fill(values, hole, iterations=200):
         total[:h, :w] = np.where(hole, 0.0, v)
         k = known.reshape(hh, 2, ww, 2).sum((1, 3))
         s = total.reshape(hh, 2, ww, 2).sum((1, 3))
-        coarse = harmonic_fill(np.where(k > 0, s / np.maximum(k, 1), 0.0), k == 0, iterations)
+        coarse = _harmonic(np.where(k > 0, s / np.maximum(k, 1), 0.0), k == 0, iterations, tol)
         v[hole] = np.repeat(np.repeat(coarse, 2, 0), 2, 1)[:h, :w][hole]
     else:
         v[hole] = v[~hole].mean() if (~hole).any() else 0.0
+    scale = tol * max(np.ptp(v[~hole]) if (~hole).any() else 1.0, 1e-12)
     for _ in range(iterations):
         p = np.pad(v, 1, mode="edge")
-        v[hole] = (0.25 * (p[:-2, 1:-1] + p[2:, 1:-1] + p[1:-1, :-2] + p[1:-1, 2:]))[hole]
+        new = (0.25 * (p[:-2, 1:-1] + p[2:, 1:-1] + p[1:-1, :-2] + p[1:-1, 2:]))[hole]
+        change = np.abs(new - v[hole]).max()
+        v[hole] = new
+        if change < scale:
+            break
     return v
 
 
-def fill_disparity(depth, hole, known=None, ring=4):
-    """``depth`` (H, W, distances along the rays) with the ``hole`` filled: a robust affine fit of the
-    disparity 1 / depth on the ``ring`` pixels around the hole (``known`` pixels only), plus the harmonic
-    fill of its residual. Exact for a plane seen on every side of the hole."""
+def ray_cosines(camera):
+    """(H, W) cosine between each pixel-centre ray and the optical axis: z-depth = distance * cosine."""
+    py, px = np.mgrid[0:camera.height, 0:camera.width]
+    _, d = pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
+    return (d @ np.asarray(camera.to_world, np.float64)[:3, 2]).reshape(camera.height, camera.width)
+
+
+def fill_disparity(depth, hole, known=None, ring=8, camera=None, near_tol=0.02):
+    """``depth`` (H, W) with the ``hole`` filled: a robust affine fit of the disparity 1 / z on the
+    ``ring`` pixels around the hole (``known`` pixels only), plus the harmonic fill of its residual (the
+    ring pixels the fit trimmed as outliers, or nearer than the plane by ``near_tol`` of their
+    disparity, bound neither). ``depth`` holds z-depths, or with ``camera``
+    distances along its pixel-centre rays (converted to z and back); NaN or <= 0 where unknown. Exact
+    for a plane seen on every side of the hole."""
     hole = np.asarray(hole, bool)
-    known = ~hole if known is None else np.asarray(known, bool) & ~hole
+    known = (~hole if known is None else np.asarray(known, bool) & ~hole) & np.isfinite(depth) & (depth > 0)
     if not hole.any():
         return np.asarray(depth, np.float64).copy()
     if not known.any():
         raise ValueError("no known depth around the hole to fill it from")
-    q = np.where(known, 1.0 / np.maximum(depth, 1e-9), 0.0)
+    cosine = ray_cosines(camera) if camera is not None else 1.0
+    q = np.where(known, 1.0 / np.maximum(depth * cosine, 1e-9), 0.0)
     band = dilate(hole, ring) & known
     if band.sum() < 3:
         band = known
@@ -89,18 +117,23 @@ def fill_disparity(depth, hole, known=None, ring=4):
     a = np.stack([x, y, np.ones_like(x)], -1).astype(np.float64)
     b = q[band]
     keep = np.ones(len(b), bool)
-    for _ in range(3):  # trim the ring pixels the plane explains worst (an occluder's edge)
+    for _ in range(8):  # trim the ring pixels the plane explains worst, and those nearer than it
         coef = np.linalg.lstsq(a[keep], b[keep], rcond=None)[0]
-        r = np.abs(a @ coef - b)
-        cut = 3.0 * np.median(r[keep]) + 1e-12
-        if (r[keep] <= cut).sum() < 3 or (r[keep] <= cut).all():
+        r = b - a @ coef
+        cut = 3.0 * np.median(np.abs(r[keep])) + 1e-12
+        good = (np.abs(r) <= cut) & (r <= near_tol * np.abs(a @ coef))
+        if (keep & good).sum() < 3 or (good[keep]).all():
             break
-        keep &= r <= cut
+        keep &= good
     yy, xx = np.mgrid[0:hole.shape[0], 0:hole.shape[1]]
     plane = coef[0] * xx + coef[1] * yy + coef[2]
     unknown = hole | ~known
+    # ring pixels nearer than the plane (an occluder's edge, the object's own haze) bound neither the fit
+    # nor the fill: the fill continues the surface behind them
+    nearer = b - (a @ coef) > near_tol * np.abs(a @ coef)
+    unknown[y[~keep | nearer], x[~keep | nearer]] = True
     residual = harmonic_fill(np.where(unknown, 0.0, q - plane), unknown)
     filled = np.maximum(plane + residual, 1e-6)
     out = np.asarray(depth, np.float64).copy()
-    out[hole] = 1.0 / filled[hole]
+    out[hole] = (1.0 / filled / cosine)[hole]
     return out

@@ -231,11 +231,11 @@ def write_removal(results, report_dir, command):
             md.append(f"| OpenCV {name} | {_f(r['psnr_mask'], 2)} | {_f(r['psnr_outside'], 2)} | "
                       f"{_f(r['residue'], 2)} | {_f(r['consistency_psnr'], 2)} | - | - |")
         prior = entry["strategies"].get("lift", {}).get("prior")
-        if prior and prior.get("reference_view") is not None:
-            md += ["", f"`lift`: reference view {prior['reference_view']}, {prior['hole_pixels']} pixels "
-                       f"inpainted and lifted, of which {100 * prior['seen_elsewhere']:.0f}% land where another "
-                       f"view sees unmasked; {prior['vertices_emptied']} vertices emptied, "
-                       f"{prior['vertices_written']} written."]
+        if prior and prior.get("reference_views"):
+            shares = ", ".join("-" if x is None else f"{100 * x:.0f}%" for x in prior["seen_elsewhere"])
+            md += ["", f"`lift`: reference views {prior['reference_views']}, hole pixels inpainted and lifted "
+                       f"{prior['hole_pixels']}, of which another view sees unmasked {shares}; "
+                       f"{prior['vertices_emptied']} vertices emptied, {prior['vertices_written']} written."]
         tiles = []
         for strategy, row in entry["strategies"].items():
             for f in sorted(os.listdir(row["out"])):

@@ -26,12 +26,18 @@ def hull_region(inputs, field, neighbours):
 
 
 def start_cleared(inputs, state):
-    """Background = full field with the object's visual hull emptied (no density, black): nothing of the
-    object survives, and L_bg then refits what some view sees of the hull."""
+    """Background = full field with the cells no training view sees unmasked emptied (no density, black;
+    the strict visual hull, :func:`never_seen`) and the vertices only the object can occupy
+    (:func:`~mi_voldis.fit.lift.object_ray_keys`: the haze a fit leaves around it, beyond the hull):
+    what any view sees stays. L_bg then refits the (grown) hull on rays near the masks. Returns the
+    lattice keys of the vertices emptied on the masked rays."""
+    from .lift import keys_mask, object_ray_keys, training_depths
     full = state.fields["full"]
-    hull, points = hull_region(inputs, full, neighbour_vertices(full))
-    state.fields["bg"] = emptied(inputs, full, hull > 0)
-    state.hull_points = points
+    depth = training_depths(inputs, state)
+    carved = object_ray_keys(inputs, full, depth, depth)
+    state.fields["bg"] = emptied(inputs, full, never_seen(inputs, full) | keys_mask(full, carved))
+    state.hull_points = hull_region(inputs, full, neighbour_vertices(full))[1]
+    return carved
 
 
 def emptied(inputs, field, region):
@@ -46,14 +52,15 @@ def emptied(inputs, field, region):
     return FieldState(field.layout, values, field.channels, field.to_world.copy(), field.density_scale)
 
 
-def never_seen(inputs, field):
-    """Bool per stored vertex of ``field``: inside the object mask of every training view that sees it
-    (the undilated, strict visual hull): no view's unmasked pixels observe it."""
+def never_seen(inputs, field, edge=1):
+    """Bool per stored vertex of ``field``: inside the object mask (grown by ``edge`` pixels: a vertex is
+    a point, a mask a set of pixel centres) of every training view that sees it (the strict visual
+    hull): no view's unmasked pixels observe it."""
     ds = inputs.ds
     pts_scene, real = vertex_positions(field)
     inside = np.zeros(len(pts_scene), bool)
     inside[real] = visual_hull(inputs.space.to_world_np(pts_scene[real]), [ds.cameras[v] for v in ds.train],
-                               ds.masks[ds.train], 0, 1.0)
+                               ds.masks[ds.train], edge, 1.0)
     return mi.Bool(inside)
 
 

@@ -135,6 +135,8 @@ class FitConfig(Settings):
                                        "sees lifted from a 2D inpainting; 'clear': the same without the lifted "
                                        "prior; 'harmonic': hull inpainted harmonically, then refitted; 'scratch': "
                                        "both fields jointly", choices=("lift", "clear", "harmonic", "scratch"))
+    prior_views: int = setting(4, "reference views inpainted and lifted in turn, each where the background "
+                                  "still has a hole (bg_strategy 'lift')", low=1)
     prior_inpainter: str = setting("membrane", "2D inpainter of the reference view: 'telea' or 'ns' (OpenCV), "
                                                  "'membrane' (harmonic)", choices=("telea", "ns", "membrane"))
     hull_dilation: float = setting(0.03, "mask dilation for the visual hull, fraction of image diagonal",

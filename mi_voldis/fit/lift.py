@@ -11,8 +11,8 @@ inside the object's visual hull only (outside it every vertex is constrained by 
 Every view sees one surface there, so the fill is consistent across views by construction; the refit
 with the masked loss then refines what views see.
 
-The reference view is, among the ``candidates`` views with the largest masks, the one with the largest
-hole (the most the prior must supply).
+Several reference views are inpainted in turn, each only where the background so far leaves a hole
+(:func:`lift_prior`), so that what one view cannot see behind the object another supplies.
 """
 import drjit as dr
 import mitsuba as mi
@@ -59,8 +59,11 @@ def write_surface(field, space, points, colors, allowed):
     voxel = float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
     surface = density_raw_for_alpha(SURFACE_ALPHA, voxel, field.density_scale)
     vacant = density_raw_for_alpha(VACANT_ALPHA, voxel, field.density_scale)
+    keys = np.zeros(0, np.int64)
     for halo in (1, 0):  # the colour's halo first, then the surface over it
         ijk, ok = lattice_cells(field, space, points, halo)
+        if not ok.any():
+            break
         n = ijk.shape[1]
         ijk, rgb = ijk[ok].reshape(-1, 3), np.repeat(colors[ok], n, axis=0)
         s = field.layout.shift
@@ -145,7 +148,7 @@ def object_ray_keys(inputs, field, views, depth, dilation=0.01, reach=0.9, fract
     for u in views:
         region = dilate(ds.masks[u], grow)
         pixels = np.flatnonzero(region)
-        behind = fill_disparity(depth[u], region).reshape(-1)[pixels]
+        behind = fill_disparity(depth[u], region, camera=ds.cameras[u]).reshape(-1)[pixels]
         keys.append(ray_keys(field, inputs.space, ds.cameras[u], pixels, reach * behind, objectish))
     return np.unique(np.concatenate(keys))
 
@@ -161,13 +164,18 @@ def empty_keys(field, keys, empty_raw):
 
 
 def training_depths(inputs, state, count=24, extra=()):
-    """Full-field depth maps of ``count`` training views spread over the set (and of ``extra``)."""
+    """Full-field depth maps of ``count`` training views spread over the set (and of ``extra``); NaN
+    where a ray ends on nothing (opacity below a half)."""
     ds = inputs.ds
     train = list(ds.train)
     pick = np.unique(np.linspace(0, len(train) - 1, min(count, len(train))).round().astype(int))
     views = sorted(set(train[k] for k in pick) | set(extra))
     integrator = fit_integrator(inputs, state)
-    return {u: render_camera(integrator, ds.cameras[u], ("full",))["full"][2] for u in views}
+    out = {}
+    for u in views:
+        _, alpha, depth = render_camera(integrator, ds.cameras[u], ("full",))["full"]
+        out[u] = np.where(alpha > 0.5, depth, np.nan)
+    return out
 
 
 def keys_mask(field, keys):
@@ -181,7 +189,7 @@ def keys_mask(field, keys):
 def lift_pixels(camera, region, depth, colors, subpixels=2):
     """World points and colours of a view's ``region`` pixels (``depth`` along the rays, ``colors``
     (H, W, 3)), ``subpixels``^2 rays per pixel so that the points leave no gap between lattice vertices."""
-    py, px = np.nonzero(region)
+    py, px = np.nonzero(region & np.isfinite(depth))
     offsets = (np.arange(subpixels) + 0.5) / subpixels
     ox, oy = np.meshgrid(offsets, offsets)
     sx = (px[:, None] + ox.reshape(1, -1)).reshape(-1)
@@ -191,31 +199,59 @@ def lift_pixels(camera, region, depth, colors, subpixels=2):
     return o + t[:, None] * d, np.repeat(colors[py, px], subpixels ** 2, axis=0)
 
 
-def lift_prior(inputs, state, allowed, empty_raw, fill="telea", dilation=0.01, tol=0.03):
-    """Empty the vertices only the object can occupy (:func:`object_ray_keys`) and write the lifted 2D
-    inpainting of the reference view into ``state.fields['bg']`` (see the module docstring);
-    ``allowed(field)``: Float per stored vertex, > 0 where writing is allowed (the cleared hull);
-    ``dilation``: of the reference mask, a fraction of the image diagonal (edge pixels mix the object's
-    colour in). Returns a summary (the reference view, its hole pixels, the vertices emptied and
-    written, the fraction of the lifted points another view sees unmasked,
-    :mod:`mi_voldis.fit.visibility`) and the lattice keys of every vertex changed."""
-    ds = inputs.ds
+def reference_views(ds, count, min_share=0.5):
+    """Up to ``count`` training views to inpaint: the one with the largest mask, then in turn the view
+    farthest from those already picked among the views whose mask is at least ``min_share`` of the
+    largest (the object seen well from around it)."""
     train = list(ds.train)
-    area = np.array([ds.masks[v].sum() for v in train])
+    area = np.array([ds.masks[v].sum() for v in train], np.float64)
     if not area.any():
-        return {"reference_view": None}, np.zeros(0, np.int64)
-    v = train[int(np.argmax(area))]
-    depth = training_depths(inputs, state, extra=(v,))
-    carved = object_ray_keys(inputs, state.fields["bg"], depth, depth, dilation)
-    state.fields["bg"] = empty_keys(state.fields["bg"], carved, empty_raw)
-    hole = dilate(ds.masks[v], int(np.ceil(dilation * np.hypot(*ds.size))))
-    colors = inpainter(fill)(np.clip(ds.images[v], 0, 1), hole)
-    filled = fill_disparity(depth[v], hole)
-    points, point_rgb = lift_pixels(ds.cameras[v], hole, filled, np.clip(colors, 0, 1))
-    state.fields["bg"], written = write_surface(state.fields["bg"], inputs.space, points, point_rgb, allowed)
-    others = [u for u in depth if u != v]
-    seen = seen_elsewhere(pixel_points(ds.cameras[v], filled, np.flatnonzero(hole)), [ds.cameras[u] for u in others],
-                          [depth[u] for u in others], [ds.masks[u] for u in others], tol=tol)
-    summary = {"reference_view": int(v), "hole_pixels": int(hole.sum()), "vertices_emptied": int(len(carved)),
-               "vertices_written": int(len(written)), "seen_elsewhere": float(seen.mean()) if len(seen) else None}
-    return summary, np.union1d(carved, written)
+        return []
+    pool = [v for v, a in zip(train, area) if a >= min_share * area.max()]
+    centre = {v: np.asarray(ds.cameras[v].to_world, np.float64)[:3, 3] for v in pool}
+    picked = [train[int(np.argmax(area))]]
+    while len(picked) < min(count, len(pool)):
+        rest = [v for v in pool if v not in picked]
+        picked.append(max(rest, key=lambda v: min(np.linalg.norm(centre[v] - centre[u]) for u in picked)))
+    return picked
+
+
+def lift_prior(inputs, state, allowed, views=4, fill="telea", dilation=0.01, tol=0.03, beyond=1.1):
+    """For each of ``views`` reference views (:func:`reference_views`) in turn write the lifted 2D inpainting of its
+    *hole* into ``state.fields['bg']`` (see the module docstring): the masked pixels (masks grown by
+    ``dilation`` of the diagonal: edge pixels mix the object's colour in) where the background so far
+    shows nothing (opacity below a half) or shows something ``beyond`` times farther than the surface
+    around the mask continues (a way through the cleared hull). ``allowed(field)``: Float per stored
+    vertex, > 0 where writing is allowed (the cleared hull). Returns a summary (per reference view its
+    hole pixels, the fraction of them another view sees unmasked (:mod:`mi_voldis.fit.visibility`);
+    the vertices written) and their lattice keys."""
+    ds = inputs.ds
+    refs = reference_views(ds, views)
+    if not refs:
+        return {"reference_views": []}, np.zeros(0, np.int64)
+    depth = training_depths(inputs, state, extra=refs)
+    grow = int(np.ceil(dilation * np.hypot(*ds.size)))
+    written, holes, seen_share = [np.zeros(0, np.int64)], [], []
+    for v in refs:
+        region = dilate(ds.masks[v], grow)
+        filled = fill_disparity(depth[v], region, camera=ds.cameras[v])
+        rgb, alpha, bg_depth = render_camera(fit_integrator(inputs, state), ds.cameras[v], ("bg",))["bg"]
+        hole = region & ((alpha < 0.5) | (bg_depth > beyond * filled))
+        holes.append(int(hole.sum()))
+        if not hole.any():
+            seen_share.append(None)
+            continue
+        image = np.where((region & ~hole)[..., None], np.clip(rgb, 0, 1), ds.images[v])
+        colors = inpainter(fill)(np.clip(image, 0, 1), hole)
+        points, point_rgb = lift_pixels(ds.cameras[v], hole, filled, np.clip(colors, 0, 1))
+        state.fields["bg"], keys = write_surface(state.fields["bg"], inputs.space, points, point_rgb, allowed)
+        written.append(keys)
+        others = [u for u in depth if u != v]
+        seen = seen_elsewhere(pixel_points(ds.cameras[v], filled, np.flatnonzero(hole)),
+                              [ds.cameras[u] for u in others], [depth[u] for u in others],
+                              [ds.masks[u] for u in others], tol=tol)
+        seen_share.append(float(seen.mean()))
+    written = np.unique(np.concatenate(written))
+    summary = {"reference_views": [int(v) for v in refs], "hole_pixels": holes, "seen_elsewhere": seen_share,
+               "vertices_written": int(len(written))}
+    return summary, written

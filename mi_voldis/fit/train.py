@@ -30,7 +30,7 @@ import drjit as dr
 import numpy as np
 
 from .. import exposure
-from ..field_state import FieldState, density_raw_for_alpha, neighbour_vertices
+from ..field_state import FieldState, neighbour_vertices
 from ..metrics import psnr
 from ..optim.adam import Adam
 from ..optim.loop import optimize
@@ -43,7 +43,6 @@ from .background import (
     hull_region,
     start_cleared,
     start_harmonic,
-    voxel_of,
 )
 from .fields import FitInputs, init_fields
 from .lift import keys_mask, lift_prior
@@ -98,14 +97,16 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         t0 = time.perf_counter()
         harmonic = cfg.bg_strategy == "harmonic"
         if "bg" not in state.fields or state.hull_points is None:
-            (start_harmonic if harmonic else start_cleared)(inputs, state)
+            if harmonic:
+                start_harmonic(inputs, state)
+            else:
+                state.prior_keys = start_cleared(inputs, state)
+                state.prior = {"vertices_emptied": int(len(state.prior_keys))}
             if cfg.bg_strategy == "lift":
-                full = state.fields["full"]
-                empty = density_raw_for_alpha(cfg.density_init_alpha, voxel_of(full) * cfg.step_voxels,
-                                              full.density_scale)
-                state.prior, state.prior_keys = lift_prior(
-                    inputs, state, lambda f: hull_region(inputs, f, neighbour_vertices(f))[0], empty,
-                    fill=inpainter or cfg.prior_inpainter)
+                lifted, keys = lift_prior(inputs, state, lambda f: hull_region(inputs, f, neighbour_vertices(f))[0],
+                                          cfg.prior_views, fill=inpainter or cfg.prior_inpainter)
+                state.prior.update(lifted)
+                state.prior_keys = np.union1d(state.prior_keys, keys)
         if harmonic:  # the object's own voxels stay empty
             hull, _, obj = background_regions(inputs, state)
             free = dr.select(obj, 0.0, hull)

@@ -1,0 +1,244 @@
+"""The background prior and its pieces: disparity fill, visibility, the lifted surface, residue-free removal."""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+import pytest
+
+import mi_voldis  # noqa: F401
+from mi_voldis.cameras import Camera, pixel_rays, project
+from mi_voldis.data.types import Dataset
+from mi_voldis.device import from_numpy
+from mi_voldis.field_state import new_field, vertex_positions
+from mi_voldis.fit.config import FitConfig
+from mi_voldis.fit.lift import lift_pixels, write_surface
+from mi_voldis.fit.visibility import seen_elsewhere
+from mi_voldis.inpaint2d import INPAINTERS, fill_disparity, harmonic_fill, inpainter
+from mi_voldis.metrics import dilate, object_residue
+from mi_voldis.render.views import render_camera
+from mi_voldis.scene import build_integrator, integrator_properties
+from mi_voldis.space import SceneBox, SceneSpace
+from mi_voldis.synth.rigs import look_at, orbit
+
+FLOOR_Y = -0.5
+
+
+def plane_depth(camera, y=FLOOR_Y):
+    """Distance along each pixel-centre ray to the plane y = ``y`` (inf where the ray misses it)."""
+    py, px = np.mgrid[0:camera.height, 0:camera.width]
+    o, d = pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
+    with np.errstate(divide="ignore"):
+        t = (y - o[:, 1]) / d[:, 1]
+    return np.where(t > 0, t, np.inf).reshape(camera.height, camera.width)
+
+
+def sphere_hit(o, d, centre, radius):
+    """Distance to the first hit of unit rays (o, d) with a sphere (inf where they miss)."""
+    oc = o - centre
+    b = np.sum(oc * d, axis=-1)
+    disc = b * b - (np.sum(oc * oc, axis=-1) - radius ** 2)
+    t = -b - np.sqrt(np.maximum(disc, 0.0))
+    return np.where((disc > 0) & (t > 0), t, np.inf)
+
+
+def test_fill_disparity_continues_a_plane_exactly():
+    cam = Camera(look_at([0.3, 1.0, 2.5], [0.0, FLOOR_Y, 0.0]), 50.0, 64, 48)
+    depth = plane_depth(cam)
+    assert np.isfinite(depth).all()
+    hole = np.zeros(depth.shape, bool)
+    hole[14:34, 20:44] = True
+    corrupted = np.where(hole, 1e3, depth)
+    corrupted[13, 25:29] *= 0.5  # an occluder's edge on the ring: trimmed from the plane fit
+    filled = fill_disparity(corrupted, hole, camera=cam)
+    np.testing.assert_allclose(filled[hole], depth[hole], rtol=1e-3)
+
+
+def test_harmonic_fill_reproduces_affine_data_and_stays_within_its_boundary():
+    y, x = np.mgrid[0:40, 0:50].astype(np.float64)
+    affine = 0.3 + 0.02 * x - 0.01 * y
+    hole = np.zeros(affine.shape, bool)
+    hole[5:35, 8:45] = True
+    np.testing.assert_allclose(harmonic_fill(affine, hole)[hole], affine[hole], atol=1e-3)
+    rng = np.random.default_rng(0)
+    noisy = rng.uniform(-1, 1, affine.shape)
+    out = harmonic_fill(noisy, hole)
+    ring = dilate(hole, 1) & ~hole
+    assert out[hole].max() <= noisy[ring].max() + 1e-9 and out[hole].min() >= noisy[ring].min() - 1e-9
+
+
+def test_inpainters_are_named_or_callable():
+    image = np.random.default_rng(1).uniform(0, 1, (20, 24, 3)).astype(np.float32)
+    hole = np.zeros((20, 24), bool)
+    hole[6:12, 8:16] = True
+    for name in INPAINTERS:
+        out = inpainter(name)(image, hole)
+        assert out.shape == image.shape and np.isfinite(out).all()
+        np.testing.assert_allclose(out[~hole], image[~hole], atol=1 / 255 + 1e-6)
+    mine = inpainter(lambda im, h: np.zeros_like(im))
+    assert mine(image, hole).sum() == 0
+    with pytest.raises(ValueError, match="unknown inpainter 'lama'"):
+        inpainter("lama")
+
+
+def test_visibility_of_a_plane_behind_an_occluder_from_two_cameras():
+    """Plane y = -0.5, a sphere above it; the plane points behind the sphere in camera A are seen from
+    camera B exactly where B's own view of them is not blocked by the sphere."""
+    centre, radius = np.array([0.0, -0.1, 0.0]), 0.3
+    cams = [Camera(look_at(p, [0.0, FLOOR_Y, 0.0]), 55.0, 80, 60) for p in ([0.0, 1.2, 2.0], [1.6, 1.0, 1.2])]
+    depths, masks = [], []
+    for cam in cams:
+        py, px = np.mgrid[0:cam.height, 0:cam.width]
+        o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
+        ts = sphere_hit(o, d, centre, radius).reshape(cam.height, cam.width)
+        tp = plane_depth(cam)
+        masks.append(ts < tp)
+        depths.append(np.minimum(ts, tp))
+    a, b = cams
+    pixels = np.flatnonzero(masks[0])
+    assert len(pixels) > 100
+    o, d = pixel_rays(a, *(np.divmod(pixels, a.width)[::-1] + np.array(0.5)))
+    points = o + plane_depth(a).reshape(-1)[pixels, None] * d
+    seen = seen_elsewhere(points, [b], [depths[1]], [masks[1]])
+    to_b = b.to_world[:3, 3]
+    dist = np.linalg.norm(points - to_b, axis=1)
+    blocked = sphere_hit(np.broadcast_to(to_b, points.shape), (points - to_b) / dist[:, None], centre, radius) < dist
+    px, py, z = project(b, points)
+    inside = (z > 0) & (px >= 0) & (px < b.width) & (py >= 0) & (py < b.height)
+    expected = inside & ~blocked
+    ix, iy = np.clip(px.astype(int), 0, b.width - 1), np.clip(py.astype(int), 0, b.height - 1)
+    edge = dilate(masks[1], 2) & ~(~dilate(~masks[1], 2))  # within 2 px of B's silhouette
+    clear = ~edge[iy, ix]
+    assert expected[clear].any() and (~expected[clear]).any()  # both cases occur
+    np.testing.assert_array_equal(seen[clear], expected[clear])
+
+
+def empty_world_field(resolution=40):
+    lo, hi = np.array([-1.0, -1.0, -1.0]), np.array([1.0, 1.0, 1.0])
+    voxel = 2.0 / (resolution - 1)
+    return new_field(lo, hi, resolution, 0, -20.0, 1.0 / voxel), SceneSpace("world")
+
+
+def test_a_lifted_surface_looks_the_same_from_every_view():
+    """A textured patch lifted from camera A onto the plane y = -0.5 renders in camera B as A's pixels
+    reprojected through that plane: two views of the lifted region agree."""
+    field, space = empty_world_field()
+    a = Camera(look_at([0.0, 1.0, 1.8], [0.0, FLOOR_Y, 0.0]), 50.0, 48, 36)
+    b = Camera(look_at([1.2, 0.8, 1.2], [0.0, FLOOR_Y, 0.0]), 50.0, 48, 36)
+    region = np.zeros((a.height, a.width), bool)
+    region[8:28, 10:38] = True
+    yy, xx = np.mgrid[0:a.height, 0:a.width]
+    colors = np.stack([0.2 + 0.6 * xx / a.width, 0.3 + 0.5 * yy / a.height, np.full(xx.shape, 0.5)], -1)
+    points, rgb = lift_pixels(a, region, plane_depth(a), colors)
+    lifted, keys = write_surface(field, space, points, rgb, lambda f: dr.full(mi.Float, 1.0, f.vertices))
+    assert len(keys) > 0
+    props = integrator_properties(space, samples=256, step_size=0.25 * 2.0 / 39)
+    integ = build_integrator({"full": lifted.plugin(), "bg": lifted.plugin()}, props)
+    in_a = render_camera(integ, a, ("full",))["full"]
+    inner = region & ~dilate(~region, 2)
+    assert in_a[1][inner].min() > 0.95  # opaque where lifted
+    assert np.abs(in_a[0][inner] - colors[inner]).mean() < 0.04
+    in_b = render_camera(integ, b, ("full",))["full"]
+    py, px = np.mgrid[0:b.height, 0:b.width]
+    o, d = pixel_rays(b, px.ravel() + 0.5, py.ravel() + 0.5)
+    hit = o + plane_depth(b).reshape(-1, 1) * d
+    u, v, z = project(a, hit)
+    ok = (z > 0) & (u >= 0) & (u < a.width) & (v >= 0) & (v < a.height)
+    ok[ok] &= inner[v[ok].astype(int), u[ok].astype(int)]
+    assert ok.sum() > 100
+    expected = colors[v[ok].astype(int), u[ok].astype(int)]
+    got = in_b[0].reshape(-1, 3)[ok]
+    assert np.abs(got - expected).mean() < 0.05
+
+
+def synthetic_object_scene(views=10, size=(40, 30)):
+    """A textured floor with a red sphere standing on it: the photos rendered from the truth, with exact
+    masks and the ground-truth background (the floor alone), and as the fitted full field the truth
+    plus a faint red haze around the sphere, as fits leave."""
+    from mi_voldis.fit.fields import FitInputs
+    from mi_voldis.fit.state import FitState
+    from mi_voldis.optim.adam import Adam
+    lo, hi = np.array([-1.0, -1.0, -1.0]), np.array([1.0, 1.0, 1.0])
+    res = 40
+    voxel = 2.0 / (res - 1)
+    fields = {name: new_field(lo, hi, res, 0, -20.0, 1.0 / voxel) for name in ("full", "truth", "floor")}
+    full = fields["full"]
+    pts, real = vertex_positions(full)
+    centre, radius = np.array([0.0, FLOOR_Y + 0.3, 0.0]), 0.3
+    r = np.linalg.norm(pts - centre, axis=1)
+    is_floor = (np.abs(pts[:, 1] - FLOOR_Y) < 1.5 * voxel) & real
+    texture = np.stack([0.3 + 0.3 * (np.sin(6 * pts[:, 0]) > 0), 0.5 + 0.2 * np.cos(5 * pts[:, 2]),
+                        np.full(len(pts), 0.35)], -1)
+    dense, haze = 4.0, -3.0  # haze: about 13% opaque across its three voxels
+    width = full.width
+    out = {}
+    for name, field in fields.items():
+        values = np.array(field.data).reshape(-1, width)
+        block = values[: full.layout.vertices_per_brick].copy()
+        values[:, 0] = np.where(is_floor, dense, -20.0)
+        values[:, 1:4] = np.where(is_floor[:, None], np.log(texture / (1 - texture)), -10.0)
+        if name != "floor":
+            obj = (r < radius) & real
+            fog = (r >= radius) & (r < radius + 3 * voxel) & real & ~is_floor & (name == "full")
+            values[obj | fog, 1:4] = np.log(np.array([0.9, 0.1, 0.1]) / np.array([0.1, 0.9, 0.9]))
+            values[obj, 0] = dense
+            values[fog, 0] = haze
+        values[: full.layout.vertices_per_brick] = block
+        field.data = from_numpy(mi.Float, values.ravel())
+        out[name] = field
+    cams = orbit(views, [0.0, FLOOR_Y, 0.0], 1.7, (50, 65), 40.0, *size)
+    space = SceneSpace("world")
+    props = integrator_properties(space, samples=256, step_size=0.5 * voxel)
+    render = {k: build_integrator({"full": f.plugin(), "bg": f.plugin()}, props) for k, f in out.items()}
+    images, backgrounds, masks = [], [], []
+    for cam in cams:
+        rgb, alpha, _ = render_camera(render["truth"], cam, ("full",))["full"]
+        assert alpha.min() > 0.99  # a closed scene: every ray ends on the floor or the sphere
+        images.append(np.clip(rgb, 0, 1))
+        backgrounds.append(np.clip(render_camera(render["floor"], cam, ("full",))["full"][0], 0, 1))
+        py, px = np.mgrid[0:cam.height, 0:cam.width]
+        o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
+        masks.append((sphere_hit(o, d, centre, radius) < plane_depth(cam).reshape(-1)).reshape(cam.height, cam.width))
+    split = np.array(["test" if k % 5 == 0 else "train" for k in range(views)])
+    ds = Dataset("synthetic", "", [f"v{k}" for k in range(views)], np.array(images, np.float32), cams, split,
+                 SceneBox("world", lo, hi), masks=np.array(masks), backgrounds=np.array(backgrounds, np.float32),
+                 meta={"aabb": [lo.tolist(), hi.tolist()], "format": "synthetic"})
+    cfg = FitConfig.from_sources(None, ["space=\"world\"", "steps_bg=0", "max_samples=256", "prior_inpainter=\"telea\"",
+                                        "resolution_schedule=[[0,40]]", "steps_full=1"])
+    return ds, cfg, out["full"], FitInputs, FitState, Adam
+
+
+@pytest.mark.parametrize("strategy", ["lift", "clear"])
+def test_removal_leaves_nothing_of_the_object(strategy, tmp_path):
+    """No density of the object survives in the background (nor, in renders, its colour from the haze),
+    the background equals the full field away from the masks, and with the lifted prior the renders
+    inside the masks show the floor, not the object."""
+    from mi_voldis.field_state import density_of, density_raw_for_alpha
+    from mi_voldis.fit.fields import fit_integrator
+    from mi_voldis.fit.train import fit
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
+    cfg = cfg.replace(bg_strategy=strategy)
+    adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2)
+    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), adam, fields={"full": full})
+    state.schedule, state.steps_full = [[0, 40]], 1
+    checkpoint = str(tmp_path / "state.npz")
+    state.save(checkpoint, "bg", 0)
+    inputs, state = fit(ds, checkpoint, cfg, resume=True, progress=False)
+    bg = state.fields["bg"]
+    pts, real = vertex_positions(bg)
+    voxel = 2.0 / 39
+    centre = np.array([0.0, FLOOR_Y + 0.3, 0.0])
+    inside = real & (np.linalg.norm(pts - centre, axis=1) < 0.3) & (pts[:, 1] > FLOOR_Y + 3 * voxel)
+    assert inside.sum() > 100
+    assert density_of(bg)[inside].max() < density_raw_for_alpha(0.01, voxel, bg.density_scale)
+    integ = fit_integrator(inputs, state)
+    for v in ds.test:
+        layers = render_camera(integ, ds.cameras[v], ("full", "bg"))
+        out, mask = ~dilate(ds.masks[v], 4), ds.masks[v]
+        assert np.abs(layers["bg"][0][out] - layers["full"][0][out]).mean() < 0.01  # what views see stays
+        if strategy == "lift":
+            removed = np.clip(layers["bg"][0], 0, 1)
+            assert object_residue(removed, ds.images[v], ds.backgrounds[v], mask) < 0.1
+            error = np.abs(removed[mask] - ds.backgrounds[v][mask]).mean()
+            assert error < 0.5 * np.abs(ds.images[v][mask] - ds.backgrounds[v][mask]).mean()
+    if strategy == "lift":
+        assert set(state.prior["reference_views"]) <= set(ds.train.tolist())
+        assert state.prior["vertices_written"] > 0
