@@ -9,6 +9,7 @@ from ..bricks import EMPTY_COLOR, EMPTY_DENSITY
 from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, neighbour_vertices, vertex_positions
 from ..metrics import dilate
 from .hull import visual_hull
+from .visibility import in_view
 
 
 def hull_region(inputs, field, neighbours):
@@ -26,8 +27,8 @@ def hull_region(inputs, field, neighbours):
 
 
 def start_cleared(inputs, state):
-    """Background = full field with the cells no training view sees unmasked emptied (no density, black;
-    the strict visual hull, :func:`never_seen`) and the vertices only the object can occupy
+    """Background = full field with the hull cells no training view sees unmasked emptied (no density,
+    black; :func:`never_seen`) and the vertices only the object can occupy
     (:func:`~mi_voldis.fit.lift.object_ray_keys`: the haze a fit leaves around it, beyond the hull):
     what any view sees stays. L_bg then refits the (grown) hull on rays near the masks. Returns the
     lattice keys of the vertices emptied on the masked rays."""
@@ -35,33 +36,38 @@ def start_cleared(inputs, state):
     full = state.fields["full"]
     depth = training_depths(inputs, state)
     carved = object_ray_keys(inputs, full, depth, depth)
-    state.fields["bg"] = emptied(inputs, full, never_seen(inputs, full) | keys_mask(full, carved))
-    state.hull_points = hull_region(inputs, full, neighbour_vertices(full))[1]
+    hull, state.hull_points = hull_region(inputs, full, neighbour_vertices(full))
+    state.fields["bg"] = emptied(inputs, full, never_seen(inputs, full, hull > 0, depth) | keys_mask(full, carved))
     return carved
 
 
 def emptied(inputs, field, region):
     """``field`` with the vertices of ``region`` (Bool per stored vertex) empty: the initial density of
-    an unfitted field, and black."""
+    an unfitted field. Their colour stays: colour is interpolated before its activation, so a black
+    vertex beside a surface would darken it; where a whole neighbourhood is empty the colour is cleared
+    at the end of the fit (:func:`clear_empty_background_color`)."""
     raw = density_raw_for_alpha(inputs.cfg.density_init_alpha, voxel_of(field) * inputs.cfg.step_voxels,
                                 field.density_scale)
     channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
-    inside = dr.repeat(region, field.width)
-    values = dr.select(inside & (channel == 0), raw,
-                       dr.select(inside & (channel > 0) & (channel < field.channels), EMPTY_COLOR, field.data))
+    values = dr.select(dr.repeat(region, field.width) & (channel == 0), raw, field.data)
     return FieldState(field.layout, values, field.channels, field.to_world.copy(), field.density_scale)
 
 
-def never_seen(inputs, field, edge=1):
-    """Bool per stored vertex of ``field``: inside the object mask (grown by ``edge`` pixels: a vertex is
-    a point, a mask a set of pixel centres) of every training view that sees it (the strict visual
-    hull): no view's unmasked pixels observe it."""
+def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
+    """Bool per stored vertex of ``field``: among ``candidates`` (Bool per stored vertex), those no
+    training view of ``depth`` (view -> full-field depth map) has in view unmasked
+    (:func:`~mi_voldis.fit.visibility.in_view`: outside its mask, grown by ``edge`` pixels as a vertex
+    is a point and a mask a set of pixel centres, and not behind something nearer): the strict visual
+    hull, where an occluder in front of the object in some view does not make its cells count."""
     ds = inputs.ds
     pts_scene, real = vertex_positions(field)
-    inside = np.zeros(len(pts_scene), bool)
-    inside[real] = visual_hull(inputs.space.to_world_np(pts_scene[real]), [ds.cameras[v] for v in ds.train],
-                               ds.masks[ds.train], edge, 1.0)
-    return mi.Bool(inside)
+    pick = np.flatnonzero(np.array(candidates) & real)
+    views = list(depth)
+    seen = in_view(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
+                   [depth[v] for v in views], [dilate(ds.masks[v], edge) for v in views], tol=tol)
+    out = np.zeros(len(pts_scene), bool)
+    out[pick[~seen]] = True
+    return mi.Bool(out)
 
 
 def start_harmonic(inputs, state):

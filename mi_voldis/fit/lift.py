@@ -31,7 +31,6 @@ from .hull import visual_hull
 from .visibility import pixel_points, seen_elsewhere
 
 SURFACE_ALPHA = 0.99  # opacity of one voxel's length of a lifted surface
-VACANT_ALPHA = 0.01  # outside the hull, a lifted surface only goes where the field is this transparent
 
 
 def lattice_cells(field, space, points, halo=0):
@@ -53,12 +52,10 @@ def write_surface(field, space, points, colors, allowed):
     corners of the cells holding world ``points`` (so that no ray slips between written vertices), and
     the colour alone one vertex further (colour is interpolated before its activation: a black neighbour
     would darken the surface's edges), where ``allowed(field)`` (Float per stored vertex) is > 0 (the
-    cleared hull) or where the field is nearly empty (``VACANT_ALPHA``: a region few views see, which the
-    field left empty): anything denser outside the hull is an observed surface and stays. Bricks
+    object's hull: outside it the background is what the views saw). Bricks
     the points need are allocated first. Returns the new field and the written lattice keys."""
     voxel = float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
     surface = density_raw_for_alpha(SURFACE_ALPHA, voxel, field.density_scale)
-    vacant = density_raw_for_alpha(VACANT_ALPHA, voxel, field.density_scale)
     keys = np.zeros(0, np.int64)
     for halo in (1, 0):  # the colour's halo first, then the surface over it
         ijk, ok = lattice_cells(field, space, points, halo)
@@ -80,8 +77,7 @@ def write_surface(field, space, points, colors, allowed):
         k, rest = np.divmod(keys, x * y)
         j, i = np.divmod(rest, x)
         address = field.layout.address(*(from_numpy(mi.UInt32, a.astype(np.uint32)) for a in (i, j, k)))
-        inside = np.array((dr.gather(mi.Float, allowed(field), address) > 0) |
-                          (dr.gather(mi.Float, field.data, address * field.width) < vacant))
+        inside = np.array(dr.gather(mi.Float, allowed(field), address) > 0)
         address = dr.gather(mi.UInt32, address, from_numpy(mi.UInt32, np.flatnonzero(inside).astype(np.uint32)))
         mean, keys = mean[inside], keys[inside]
         data = dr.copy(field.data)

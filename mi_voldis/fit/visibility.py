@@ -10,6 +10,24 @@ import numpy as np
 from ..cameras import pixel_rays, project
 
 
+def in_view(points, cameras, depths, masks, tol=0.05):
+    """Bool per world point (n, 3): some camera of ``cameras`` has it in its image, outside its mask
+    ``masks[j]``, with nothing nearer than (1 - ``tol``) times its distance in front of it there (its
+    full-field depth map ``depths[j]``): points in front of surfaces and just inside them count; points
+    behind an occluder do not."""
+    points = np.asarray(points, np.float64)
+    out = np.zeros(len(points), bool)
+    for cam, depth, mask in zip(cameras, depths, masks):
+        px, py, z = project(cam, points)
+        ix, iy = np.floor(px).astype(np.int64), np.floor(py).astype(np.int64)
+        ok = (z > 0) & (ix >= 0) & (ix < cam.width) & (iy >= 0) & (iy < cam.height)
+        ok[ok] &= ~mask[iy[ok], ix[ok]]
+        dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
+        ok[ok] &= ~(depth[iy[ok], ix[ok]] < (1.0 - tol) * dist[ok])  # NaN depth (nothing there): in view
+        out |= ok
+    return out
+
+
 def seen_elsewhere(points, cameras, depths, masks, images=None, tol=0.03):
     """Bool per world point (n, 3): seen unmasked by some camera of ``cameras``, given each camera's
     full-field depth map ``depths[j]`` (distance along its rays) and mask ``masks[j]``; with ``images``,
