@@ -171,3 +171,18 @@ def test_forward_mode_is_refused_clearly():
     dr.enable_grad(params["integrator.full.density"])
     with pytest.raises(Exception, match="forward-mode"):
         scene.integrator().render_forward(scene, params)
+
+
+@pytest.mark.parametrize("keep", [False, True])
+def test_a_finished_job_drops_its_checkpoints_unless_kept(tmp_path, keep):
+    from mi_voldis.io.run_folder import CHECKPOINTS, staged
+    out = str(tmp_path / "run")
+    with staged(out, keep_checkpoints=keep) as stage:
+        os.makedirs(os.path.join(stage, CHECKPOINTS))
+        with open(os.path.join(stage, CHECKPOINTS, "last.npz"), "wb") as f:
+            f.write(b"state")
+        with open(os.path.join(stage, "metrics.json"), "w") as f:
+            f.write("{}")
+    assert os.path.isfile(os.path.join(out, "metrics.json"))
+    assert os.path.isfile(os.path.join(out, CHECKPOINTS, "last.npz")) == keep
+    assert not os.path.exists(out + ".partial")

@@ -196,6 +196,7 @@ def _copy_previews(run, report_dir, scene):
 def write_removal(results, report_dir, command):
     """reports/removal.md: one table per scene (strategy rows, OpenCV beside), previews copied beside it.
     Returns the file's path."""
+    os.makedirs(report_dir, exist_ok=True)
     md = ["# Removal by background strategy", "",
           f"Run {results['date']} with `{command}` ({results['seconds'] / 60:.1f} min). Machine: "
           f"{results['machine']['cpu']}, {results['machine']['cores']} cores; variant "
@@ -217,7 +218,7 @@ def write_removal(results, report_dir, command):
         md += [f"## {scene}", "",
                f"Full field: held-out PSNR {m['held_out']['psnr']:.2f} dB, fit {m['seconds']['fit']:.0f} s "
                f"({'reused' if fit['reused'] else 'fitted'} {fit['fitted']} UTC).", "",
-               "| strategy | PSNR in mask | PSNR outside (full: ) | residue | consistency | coverage IoU | "
+               "| strategy | PSNR in mask | PSNR outside (full field) | residue | consistency | coverage IoU | "
                "bg seconds |", "|---|---|---|---|---|---|---|"]
         base = None
         for strategy, row in entry["strategies"].items():
@@ -236,20 +237,41 @@ def write_removal(results, report_dir, command):
             md += ["", f"`lift`: reference views {prior['reference_views']}, hole pixels inpainted and lifted "
                        f"{prior['hole_pixels']}, of which another view sees unmasked {shares}; "
                        f"{prior['vertices_emptied']} vertices emptied, {prior['vertices_written']} written."]
-        tiles = []
-        for strategy, row in entry["strategies"].items():
-            for f in sorted(os.listdir(row["out"])):
-                if f.endswith("_bg.png"):
-                    name = f"removal_{scene}_{strategy}_{f}"
-                    shutil.copy(os.path.join(row["out"], f), os.path.join(report_dir, name))
-                    tiles.append((strategy, f[:7], name))
-        if tiles:
-            md += ["", "Backgrounds of the held-out views (rows: strategies):", ""]
-            for strategy in entry["strategies"]:
-                md.append(" ".join(f"![{strategy} {view}]({name})" for s, view, name in tiles if s == strategy)
-                          + f" `{strategy}`")
+        sheet = _removal_sheet(fit["out"], entry["strategies"], os.path.join(report_dir, f"removal_{scene}.png"))
+        if sheet:
+            md += ["", f"![{scene}]({sheet}) Rows: photo, ground-truth background, OpenCV Telea, then "
+                       + ", ".join(f"`{s}`" for s in entry["strategies"]) + "; columns: the first held-out views."]
         md.append("")
     path = os.path.join(report_dir, "removal.md")
     with open(path, "w") as f:
         f.write("\n".join(md) + "\n")
     return path
+
+
+def _removal_sheet(run, strategies, path, views=3):
+    """One PNG: for the first ``views`` held-out views (columns), the photo, the ground-truth background,
+    OpenCV Telea's inpainting and each strategy's background (rows). Returns its file name, or None."""
+    import json
+
+    import imageio.v3 as iio
+    import numpy as np
+
+    from ..data import load_dataset
+    from ..inpaint2d import opencv_inpaint
+    from ..io.images import contact_sheet, display_to_uint8, write_png
+    from ..metrics import dilate
+    with open(os.path.join(run, "config.json")) as f:
+        config = json.load(f)
+    record = config["dataset"]
+    ds = load_dataset(record["path"], record["format"], record["holdout"])
+    tests = [v for v in ds.test if all(os.path.isfile(os.path.join(r["out"], f"view{v:03d}_bg.png"))
+                                       for r in strategies.values())][:views]
+    if not tests or ds.backgrounds is None:
+        return None
+    dil = int(np.ceil(config["hull_dilation"] * np.hypot(*ds.size)))
+    rows = [[display_to_uint8(ds.images[v]) for v in tests], [display_to_uint8(ds.backgrounds[v]) for v in tests],
+            [display_to_uint8(opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "telea")) for v in tests]]
+    rows += [[iio.imread(os.path.join(r["out"], f"view{v:03d}_bg.png"))[..., :3] for v in tests]
+             for r in strategies.values()]
+    write_png(path, contact_sheet([im for row in rows for im in row], columns=len(tests)))
+    return os.path.basename(path)
