@@ -3,6 +3,9 @@
     python scripts/render.py SCENE.xml --out DIR [--spp N] [--width W --height H] [--variant V]
     python scripts/render.py RUN/scene.xml --cameras DATASET --split test --out DIR
 
+With --cameras, the views (split, downscale factor) are those the run was fitted with, read from the
+config.json beside SCENE.xml when there is one.
+
 Writes, per sensor of the scene (or per camera of a dataset split), DIR/<name>.exr (R, G, B, A,
 depth.Z, full.*, bg.*, fg.*; colours in linear light) and PNG previews DIR/<name>_<layer>.png.
 """
@@ -11,6 +14,17 @@ import os
 import sys
 
 from _boundary import add_debug, positive, run
+
+
+def run_record(folder):
+    """The dataset record of the run folder holding the scene (its config.json), or None."""
+    import json
+    try:
+        with open(os.path.join(folder, "config.json")) as f:
+            record = json.load(f).get("dataset")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return record if isinstance(record, dict) and record.get("path") else None
 
 
 def main(argv=None):
@@ -39,7 +53,9 @@ def main(argv=None):
     cameras = None
     if args.cameras:
         from mi_voldis.data import load_dataset
-        ds = load_dataset(args.cameras)
+        from mi_voldis.tasks.base import load_recorded
+        record = run_record(os.path.dirname(os.path.abspath(args.scene)))
+        ds = load_recorded(record, args.cameras) if record else load_dataset(args.cameras)
         views = range(len(ds.cameras)) if args.split == "all" else (ds.test if args.split == "test" else ds.train)
         if not len(views):
             raise ValueError(f"{args.cameras}: no {args.split} views to render")

@@ -103,7 +103,7 @@ SCENE = "scenes/tabletop.xml"
 CASES = [
     # (script, arguments, exit code, text the one line must contain)
     (T, ["{base}/nowhere", "--out", "{existing}"], 1, "{base}/nowhere: no such dataset folder"),
-    (T, ["{base}/empty_dataset", "--out", "{existing}"], 1, "neither transforms.json nor poses_bounds.npy"),
+    (T, ["{base}/empty_dataset", "--out", "{existing}"], 1, "neither transforms.json, poses_bounds.npy nor"),
     (T, ["{base}/fov0", "--out", "{existing}"], 1, "camera_angle_x must be in (0, pi)"),
     (T, ["{dataset}", "--out", "{existing}", "--holdout", "-2"], 2, "--holdout must be 0"),
     (T, ["{base}/alltest", "--out", "{existing}"], 1, "{base}/alltest: no training views"),

@@ -206,13 +206,13 @@ def test_llff_errors(tmp_path, breakage, message):
 
 
 @pytest.mark.parametrize("breakage, message, culprit", [
-    ("missing_mask", "mask file is missing", "img_01"),
+    ("missing_mask_path", "mask .masks/img_01.png. not found", "transforms.json"),
     ("mask_size", "mask is 12x9 but the images are 24x18", "img_02"),
     ("empty_masks", "every object mask is empty", "masks"),
     ("full_mask", "mask covers every pixel", "img_00"),
     ("ambiguous_key", "'mask_path'", "transforms.json"),
     ("ambiguous_focal", "intrinsics are ambiguous", "transforms.json"),
-    ("per_frame_intrinsics", "per-frame intrinsics", "transforms.json"),
+    ("bad_camera_model", "camera_model FOV cannot be undistorted", "transforms.json"),
     ("missing_image", "not found", "transforms.json"),
     ("bad_matrix", "not a rigid motion", "transforms.json"),
 ])
@@ -220,7 +220,9 @@ def test_transforms_errors(tmp_path, breakage, message, culprit):
     root = str(tmp_path)
     meta, names = good_transforms(root)
     masks = tmp_path / "masks"
-    if breakage == "missing_mask":
+    if breakage == "missing_mask_path":
+        for k, frame in enumerate(meta["frames"]):
+            frame["object_mask_path"] = f"masks/{names[k]}"
         os.remove(masks / names[1])
     elif breakage == "mask_size":
         iio.imwrite(masks / names[2], np.full((9, 12), 255, np.uint8))
@@ -233,8 +235,8 @@ def test_transforms_errors(tmp_path, breakage, message, culprit):
         meta["frames"][1]["mask_path"] = "masks/x.png"
     elif breakage == "ambiguous_focal":
         meta["camera_angle_x"] = 1.0
-    elif breakage == "per_frame_intrinsics":
-        meta["frames"][0]["fl_x"] = 30.0
+    elif breakage == "bad_camera_model":
+        meta["camera_model"] = "FOV"
     elif breakage == "missing_image":
         meta["frames"][2]["file_path"] = "images/nope"
     elif breakage == "bad_matrix":

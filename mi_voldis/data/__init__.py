@@ -1,34 +1,43 @@
-"""Datasets: loaders for LLFF and transforms.json captures, returning a typed :class:`Dataset`."""
+"""Datasets: loaders for LLFF, transforms.json and COLMAP captures, returning a typed :class:`Dataset`."""
 import os
 
 import numpy as np
 
+from .colmap import load_colmap, model_folder
 from .llff import load_llff
 from .transforms_json import load_transforms
 from .types import Dataset, DatasetError
 
-__all__ = ["Dataset", "DatasetError", "load_dataset"]
+__all__ = ["Dataset", "DatasetError", "FORMATS", "load_dataset"]
+
+
+LOADERS = {"llff": load_llff, "transforms": load_transforms, "colmap": load_colmap}
+FORMATS = ("auto", *LOADERS)
 
 
 def load_dataset(root, fmt="auto", holdout=8, factor=None):
-    """Load a dataset folder. ``fmt``: 'llff', 'transforms' or 'auto' (transforms.json when present,
-    else poses_bounds.npy). ``holdout``: every k-th view is a test view unless the files give a split.
-    ``factor``: LLFF image downsampling folder (images_<factor>)."""
+    """Load a dataset folder. ``fmt``: 'llff', 'transforms', 'colmap' or 'auto' (transforms.json when
+    present, else poses_bounds.npy, else a COLMAP sparse model). ``holdout``: every k-th view is a test
+    view unless the files give a split. ``factor``: read the images downscaled by K (``images_K/``;
+    for LLFF without it, the most downscaled folder there is)."""
     if not os.path.isdir(root):
         raise DatasetError(f"{root}: no such dataset folder")
     has_json = any(os.path.isfile(os.path.join(root, f)) for f in
                    ("transforms.json", "transforms_train.json", "transforms_test.json"))
     has_llff = os.path.isfile(os.path.join(root, "poses_bounds.npy"))
     if fmt == "auto":
-        fmt = "transforms" if has_json else "llff" if has_llff else None
+        fmt = "transforms" if has_json else "llff" if has_llff else "colmap" if model_folder(root) else None
         if fmt is None:
-            raise DatasetError(f"{root}: neither transforms.json nor poses_bounds.npy found")
-    if fmt not in ("transforms", "llff"):
-        raise DatasetError(f"unknown dataset format '{fmt}' (expected auto, llff or transforms)")
+            raise DatasetError(f"{root}: neither transforms.json, poses_bounds.npy nor sparse/0/cameras.bin found")
+    if fmt not in LOADERS:
+        raise DatasetError(f"unknown dataset format '{fmt}' (expected auto, {', '.join(LOADERS)})")
     if not (isinstance(holdout, int) and holdout >= 0):
         raise DatasetError(f"{root}: holdout must be 0 (no test views) or a positive k, got {holdout}")
-    ds = load_transforms(root, holdout) if fmt == "transforms" else load_llff(root, factor, holdout)
+    if factor is not None and not (isinstance(factor, int) and factor >= 1):
+        raise DatasetError(f"{root}: the downscale factor must be a whole number >= 1, got {factor}")
+    ds = LOADERS[fmt](root, holdout=holdout, factor=factor)
     check(ds)
+    ds.meta["factor"] = factor
     return ds
 
 

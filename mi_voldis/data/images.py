@@ -1,9 +1,18 @@
-"""Reading images and object masks, with errors that name the file."""
+"""Reading images and object masks, with errors that name the file.
+
+Fields are fitted to display-encoded (sRGB) colour, as the photographs are stored. EXR images
+hold *linear* light: :func:`read_image` encodes them with the sRGB curve
+(after compositing RGBA over the background in linear light), clipping values above 1, and says so
+through :func:`is_linear` so that a loader can record the input's colour space.
+"""
 import os
 
+import cv2
 import imageio.v3 as iio
 import numpy as np
 
+from ..io.exr import read_exr
+from ..io.images import linear_to_srgb, srgb_to_linear
 from .types import DatasetError
 
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".exr")
@@ -12,49 +21,91 @@ IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".exr")
 def has_alpha(path):
     """True when the image file has an alpha channel (checked on its header only)."""
     try:
+        if is_linear(path):
+            return "A" in read_exr(path)
         return iio.improps(path).shape[-1] == 4
     except Exception:
         return False
 
 
-def read_image(path, background=(1.0, 1.0, 1.0)):
-    """RGB float32 image in [0, 1]; RGBA is composited over ``background`` (display values)."""
+def is_linear(path):
+    """True for files that store linear light (floating-point pixels: EXR)."""
+    return path.lower().endswith(".exr")
+
+
+def _read(path, what):
+    """Pixels as float32 (H, W) or (H, W, C) in the file's own encoding."""
     if not os.path.isfile(path):
-        raise DatasetError(f"{path}: image file is missing")
+        raise DatasetError(f"{path}: {what} file is missing")
+    if is_linear(path):
+        try:
+            channels = read_exr(path)
+        except ValueError as e:
+            raise DatasetError(str(e)) from None
+        return _exr_stack(channels, path, what)
     try:
         img = iio.imread(path)
     except Exception as e:  # imageio raises many types for broken files
-        raise DatasetError(f"{path}: unreadable or truncated image ({type(e).__name__}: {e})") from None
-    img = _to_float(img, path)
+        raise DatasetError(f"{path}: unreadable or truncated {what} ({type(e).__name__}: {e})") from None
+    return _to_float(img, path)
+
+
+def _exr_stack(channels, path, what):
+    """(H, W, C) of an EXR's main image: R, G, B[, A], or Y[, A], or its single channel."""
+    for names in (("R", "G", "B", "A"), ("R", "G", "B"), ("Y", "A"), ("Y",)):
+        if all(n in channels for n in names):
+            return np.stack([channels[n] for n in names], axis=-1).astype(np.float32)
+    if len(channels) == 1:
+        return next(iter(channels.values())).astype(np.float32)
+    raise DatasetError(f"{path}: the EXR {what} has no R, G, B or Y channels (it has {', '.join(sorted(channels))})")
+
+
+def read_image(path, background=(1.0, 1.0, 1.0)):
+    """RGB float32 image in [0, 1], display-encoded; RGBA is composited over ``background`` (display
+    values). Linear files (EXR) are composited in linear light, then encoded with the sRGB curve."""
+    img = _read(path, "image")
     if img.ndim == 2:
         img = np.repeat(img[..., None], 3, axis=2)
-    if img.ndim != 3 or img.shape[2] not in (3, 4):
+    if img.ndim != 3 or img.shape[2] not in (2, 3, 4):
         raise DatasetError(f"{path}: expected an RGB or RGBA image, got shape {img.shape}")
+    if img.shape[2] == 2:  # grey + alpha
+        img = np.concatenate([np.repeat(img[..., :1], 3, axis=2), img[..., 1:]], axis=2)
+    if not np.all(np.isfinite(img)):
+        raise DatasetError(f"{path}: the image has NaN or infinite pixels")
+    linear = is_linear(path)
     if img.shape[2] == 4:
-        a = img[..., 3:4]
-        img = img[..., :3] * a + np.asarray(background, np.float32) * (1 - a)
-    return np.ascontiguousarray(img[..., :3], dtype=np.float32)
+        a = np.clip(img[..., 3:4], 0.0, 1.0)
+        bg = np.asarray(background, np.float32)  # a display colour
+        if linear:  # EXR colour is premultiplied by alpha
+            img = img[..., :3] + srgb_to_linear(bg).astype(np.float32) * (1 - a)
+        else:
+            img = img[..., :3] * a + bg * (1 - a)
+    img = img[..., :3]
+    if linear:
+        img = linear_to_srgb(img)
+    return np.ascontiguousarray(img, dtype=np.float32)
 
 
 def read_mask(path, rule="nonzero"):
     """Boolean object mask. ``rule`` 'nonzero': any value > 0 is the object (SPIn-NeRF labels);
-    'white': values above half the range are the object (white = object)."""
-    if not os.path.isfile(path):
-        raise DatasetError(f"{path}: mask file is missing")
-    try:
-        m = iio.imread(path)
-    except Exception as e:
-        raise DatasetError(f"{path}: unreadable or truncated mask ({type(e).__name__}: {e})") from None
-    m = _to_float(m, path)
+    'white': values above half the range are the object (white = object). A matte stored in an alpha
+    channel (RGBA or grey + alpha whose alpha is not constant) is read from the alpha channel; EXR
+    masks are read as they are stored (coverage in [0, 1])."""
+    m = _read(path, "mask")
     if m.ndim == 3:
-        m = m[..., :3].max(axis=2) if m.shape[2] != 2 else m[..., 0]
+        if m.shape[2] in (2, 4) and np.ptp(m[..., -1]) > 0:
+            m = m[..., -1]
+        else:
+            m = m[..., :3].max(axis=2) if m.shape[2] != 2 else m[..., 0]
+    if not np.all(np.isfinite(m)):
+        raise DatasetError(f"{path}: the mask has NaN or infinite pixels")
     return m > 0 if rule == "nonzero" else m > 0.5
 
 
 def read_coverage(path):
-    """Fractional object coverage in [0, 1] (single channel; EXR or 16-bit PNG)."""
-    img = read_image(path)
-    return img[..., 0]
+    """Fractional object coverage in [0, 1] (the first channel; EXR or 16-bit PNG), as stored."""
+    img = _read(path, "coverage")
+    return img if img.ndim == 2 else img[..., 0]
 
 
 def _to_float(img, path):
@@ -83,6 +134,49 @@ def check_sizes(images, paths, what="image"):
         if img.shape[:2] != (h, w):
             raise DatasetError(f"{path}: {what} is {img.shape[1]}x{img.shape[0]} but {paths[0]} is {w}x{h}; "
                                f"all {what}s of a set must have one size")
+
+
+def mask_folder_paths(root, image_paths, factor=None):
+    """Per image, its mask in ``root/masks_K/`` (with ``factor`` K > 1, when that folder exists) or
+    ``root/masks/`` with the same file stem, or None; None when there is no such folder."""
+    names = [f"masks_{factor}"] if factor and factor > 1 else []
+    folder = next((os.path.join(root, d) for d in names + ["masks"] if os.path.isdir(os.path.join(root, d))), None)
+    if folder is None:
+        return None
+    by_stem = {os.path.splitext(f)[0]: f for f in os.listdir(folder)}
+    stems = (os.path.splitext(os.path.basename(p))[0] for p in image_paths)
+    return [os.path.join(folder, by_stem[s]) if s in by_stem else None for s in stems]
+
+
+def read_masks(paths, rule, shape, notes, resize=False):
+    """Object masks of the views whose entry in ``paths`` is a path; a view whose entry is None has no
+    mask and gets an all-True one (it trains the full field only; a line in ``notes`` says so).
+    Returns (masks (N, H, W) bool, masked (N,) bool or None when every view has a mask), or
+    (None, None) when no view has one. ``resize``: masks larger than the images by a whole factor
+    (full-resolution masks of downscaled images) are reduced to them (area average > 1/2)."""
+    given = [k for k, p in enumerate(paths) if p is not None]
+    if not given:
+        return None, None
+    masks = [read_mask(paths[k], rule) for k in given]
+    if resize:
+        masks = [_reduce(m, shape) for m in masks]
+    check_masks(masks, [paths[k] for k in given], shape)
+    out = np.ones((len(paths), *shape), bool)
+    out[given] = masks
+    if len(given) == len(paths):
+        return out, None
+    masked = np.zeros(len(paths), bool)
+    masked[given] = True
+    notes.append(f"{len(paths) - len(given)} of {len(paths)} views have no object mask: they train the full "
+                 f"scene only; the background learns from the {len(given)} masked views")
+    return out, masked
+
+
+def _reduce(mask, shape):
+    h, w = shape
+    if mask.shape == shape or mask.shape[0] % h or mask.shape[1] % w or mask.shape[0] // h != mask.shape[1] // w:
+        return mask
+    return cv2.resize(mask.astype(np.float32), (w, h), interpolation=cv2.INTER_AREA) > 0.5
 
 
 def check_masks(masks, paths, images_shape):

@@ -2,18 +2,19 @@
 
 ``poses_bounds.npy`` holds N x 17 numbers per view: a 3x5 matrix (rotation columns [down, right,
 back], camera position, and [H, W, focal] of the ORIGINAL images) and the near/far bounds. The
-focal length is rescaled to the size of the images actually read. Object masks are read from
-``images_K/label/NAME.png`` (SPIn-NeRF: any nonzero value is the object) or ``masks/NAME.*`` (white =
-object), matched by file name. The scene is forward-facing: fields live in NDC space with NeRF's
-near plane 0.75 x the smallest depth bound.
+focal length is rescaled to the size of the images actually read. Object masks: SPIn-NeRF's layout
+(:func:`mask_paths`: ``images_K/label/`` for training views, ``images_K/test_label/`` for the test
+views photographed without the object, whose photos are then the ground-truth background) or
+``masks/NAME.*`` (white = object); views without a mask train the full field only. A forward-facing
+rig gets NDC with NeRF's near plane 0.75 x the smallest depth bound; another rig a world box.
 """
 import os
 
 import numpy as np
 
 from .conventions import camera_from_intrinsics, llff_to_mitsuba, mitsuba_to_llff, rigid_error
-from .images import check_masks, check_sizes, list_images, read_image, read_mask
-from .scene_box import NEAR_FRACTION, ndc_box
+from .images import check_sizes, is_linear, list_images, mask_folder_paths, read_image, read_masks
+from .scene_box import NEAR_FRACTION, capture_box
 from .types import Dataset, DatasetError
 
 
@@ -31,16 +32,24 @@ def image_folder(root, factor=None):
     raise DatasetError(f"{root}: no images/ or images_K/ folder next to poses_bounds.npy")
 
 
-def mask_paths(root, folder, names):
-    """Mask file per image, or None when the dataset has no masks."""
-    label = os.path.join(folder, "label")
-    if os.path.isdir(label):
-        return [os.path.join(label, n) for n in names], "nonzero"
-    masks = os.path.join(root, "masks")
-    if os.path.isdir(masks):
-        by_stem = {os.path.splitext(f)[0]: f for f in os.listdir(masks)}
-        return [os.path.join(masks, by_stem.get(os.path.splitext(n)[0], n)) for n in names], "white"
-    return None, None
+def mask_paths(root, folder, paths):
+    """(mask rule, per image its training mask or None, per image its test mask or None), or None when
+    the dataset has no masks. SPIn-NeRF: ``<folder>/label/`` holds the training views' masks (any
+    nonzero value is the object) and ``<folder>/test_label/`` marks where the object stood in the test
+    views, taken without it; else ``masks/`` (white = object). Files match the images by stem."""
+    label, test_label = os.path.join(folder, "label"), os.path.join(folder, "test_label")
+    if os.path.isdir(label) or os.path.isdir(test_label):
+        return "nonzero", _by_stem(label, paths), _by_stem(test_label, paths)
+    given = mask_folder_paths(root, paths)
+    return None if given is None else ("white", given, [None] * len(paths))
+
+
+def _by_stem(folder, paths):
+    if not os.path.isdir(folder):
+        return [None] * len(paths)
+    files = {os.path.splitext(f)[0]: f for f in os.listdir(folder)}
+    stems = (os.path.splitext(os.path.basename(p))[0] for p in paths)
+    return [os.path.join(folder, files[s]) if s in files else None for s in stems]
 
 
 def load_llff(root, factor=None, holdout=8):
@@ -73,18 +82,27 @@ def load_llff(root, factor=None, holdout=8):
                                f"differs from the {w}x{h} images in {folder}")
         cameras.append(camera_from_intrinsics(llff_to_mitsuba(pose), w, h, f0 * w / w0))
     bounds = data[:, 15:17]
-    masks = None
-    mpaths, rule = mask_paths(root, folder, names)
-    if mpaths is not None:
-        masks = [read_mask(p, rule) for p in mpaths]
-        check_masks(masks, mpaths, (h, w))
-        masks = np.stack(masks)
+    notes = []
     split = np.array(["test" if holdout and k % holdout == 0 else "train" for k in range(len(names))])
-    near = NEAR_FRACTION * bounds.min()
-    return Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names,
-                   images=np.stack(images), cameras=cameras, split=split,
-                   box=ndc_box(cameras, near, bounds.max() * 1.5), masks=masks, near_far=bounds,
-                   meta={"format": "llff", "image_folder": folder})
+    masks = masked = backgrounds = None
+    found = mask_paths(root, folder, paths)
+    if found is not None:
+        rule, train_paths, test_paths = found
+        is_test = np.array([p is not None for p in test_paths])
+        if is_test.any():  # SPIn-NeRF: the test views are the photos taken without the object
+            split = np.where(is_test, "test", "train")
+            backgrounds = np.where(is_test[:, None, None, None], np.stack(images), np.nan).astype(np.float32)
+            notes.append(f"{int(is_test.sum())} views with test_label/ masks are test views: their photos are "
+                         "the background without the object")
+        given = [t if t is not None else m for m, t in zip(train_paths, test_paths)]
+        masks, masked = read_masks(given, rule, (h, w), notes)
+    box, _ = capture_box(cameras, None, path, notes, near=NEAR_FRACTION * bounds.min(), far=bounds.max() * 1.5)
+    ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names,
+                 images=np.stack(images), cameras=cameras, split=split, box=box, masks=masks, masked=masked,
+                 near_far=bounds, backgrounds=backgrounds,
+                 meta={"format": "llff", "image_folder": folder, "notes": notes,
+                       "color_space": "linear (encoded with the sRGB curve)" if is_linear(paths[0]) else "sRGB"})
+    return ds
 
 
 def write_llff(root, cameras, bounds, folder="images"):

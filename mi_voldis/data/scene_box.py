@@ -3,7 +3,9 @@ import numpy as np
 
 from ..cameras import pixel_rays
 from ..space import SceneBox, SceneSpace
+from .types import DatasetError
 
+NERF_NEAR = 1.0  # NeRF's NDC near plane (world units), used when nothing gives depth bounds
 NEAR_FRACTION = 0.75  # forward-facing captures: rays start at 0.75 x the nearest depth bound (NeRF's NDC near plane)
 
 
@@ -51,6 +53,35 @@ def average_pose(cameras):
     pose = np.eye(4)
     pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = left, up, forward, m[:, :3, 3].mean(axis=0)
     return pose
+
+
+def capture_box(cameras, points, where, notes, forward=None, near=None, far=None, aabb=None):
+    """(scene box, near/far bounds or None) of a capture. Forward-facing (``forward``, else detected):
+    NDC with the given bounds, else the sparse ``points``' (:func:`~mi_voldis.data.points.depth_bounds`),
+    else NeRF's default near plane, a line in ``notes`` saying which. Otherwise ``aabb`` when stated,
+    else the points' box (with the cameras), else a box from the camera layout."""
+    from .points import depth_bounds, points_box
+    if forward is None:
+        forward = is_forward_facing(cameras)
+    if forward:
+        if not (near and far):
+            bounds = [b for b in depth_bounds(cameras, points) if b is not None] if points is not None else []
+            if bounds:
+                near, far = float(min(b[0] for b in bounds)), float(max(b[1] for b in bounds))
+                notes.append(f"{where}: no near/far given; from the sparse points: near {near:.4g}, far {far:.4g}")
+            else:
+                near, far = NERF_NEAR, 1e3 * NERF_NEAR
+                notes.append(f"{where}: no near/far and no points; NeRF's default near plane {near:g} (far {far:g})")
+        if not 0 < near < far:
+            raise DatasetError(f"{where}: near ({near}) and far ({far}) must satisfy 0 < near < far")
+        return ndc_box(cameras, near, far), np.array([[near, far]])
+    if aabb is not None:
+        return SceneBox("world", aabb[0], aabb[1]), None
+    if points is not None and len(points) >= 10:
+        lo, hi = points_box(points)
+        pos = np.array([np.asarray(c.to_world)[:3, 3] for c in cameras])
+        return SceneBox("world", np.minimum(lo, pos.min(axis=0)), np.maximum(hi, pos.max(axis=0))), None
+    return world_box(cameras), None
 
 
 def ndc_box(cameras, near, far, z_max=0.999):

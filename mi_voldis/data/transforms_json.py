@@ -1,36 +1,51 @@
 """transforms.json datasets (Blender / instant-ngp / nerfstudio), with object masks and ground truth.
 
 Top level: ``camera_angle_x`` (Blender) or ``fl_x`` [, ``fl_y``, ``cx``, ``cy``, ``w``, ``h``]
-(pixels); optional ``aabb`` ([[x0, y0, z0], [x1, y1, z1]], the scene box), ``forward_facing``
-(bool; otherwise detected from the camera layout), ``background_color`` (RGB over which RGBA
-images are composited; default white, Blender's convention), ``moved_transform`` (4x4 world-space
-matrix of the ``moved_path`` ground truth). Per frame: ``file_path`` (relative to the JSON file,
-with or without extension), ``transform_matrix`` (camera-to-world, OpenGL axes), optional ``split``
-('train' / 'test'), ``object_mask_path`` (white = object), ``coverage_path``, ``background_path``
-(the scene without the object) and ``moved_path``. Without ``object_mask_path``, masks come from a
-``masks/`` folder with the images' file stems. ``transforms_train.json`` + ``transforms_test.json``
-(or ``_val``) may replace one file; they give the split.
+(pixels, for images of ``w`` x ``h``), nerfstudio's ``camera_model`` (PINHOLE, OPENCV,
+OPENCV_FISHEYE: the views are undistorted once with ``k1``..``k4``, ``p1``, ``p2``;
+:mod:`mi_voldis.data.lens`); every one of these may instead be given per frame. Optional:
+``aabb`` ([[x0, y0, z0], [x1, y1, z1]], the scene box), ``forward_facing`` (bool; otherwise detected
+from the camera layout), ``near`` / ``far`` (forward-facing depth bounds; estimated from the points,
+or NeRF's default near plane 1, when absent), ``ply_file_path`` (sparse points in the frames' world
+frame, as ns-process-data writes them: they give depth bounds and the box), ``applied_transform``
+(the 3x4 matrix nerfstudio applied to COLMAP's world; kept in ``meta``), ``background_color`` (RGB
+over which RGBA images are composited; default white, Blender's convention), ``moved_transform``
+(4x4 world-space matrix of the ``moved_path`` ground truth). Per frame: ``file_path`` (relative to
+the JSON file, with or without extension), ``transform_matrix`` (camera-to-world, OpenGL axes),
+optional ``split`` ('train' / 'test'), ``object_mask_path`` (white = object), ``coverage_path``,
+``background_path`` (the scene without the object) and ``moved_path``. Without
+``object_mask_path``, masks come from a ``masks/`` folder with the images' file stems; views without
+one train the full field only. ``transforms_train.json`` + ``transforms_test.json`` (or ``_val``) may
+replace one file; they give the split. ``factor`` K (nerfstudio's downscale) reads ``images_K/NAME``
+(masks from ``masks_K/`` when present, else resized) with the intrinsics scaled to match.
 """
 import json
 import os
 
 import numpy as np
 
-from ..space import SceneBox
 from .conventions import camera_from_intrinsics, opengl_to_mitsuba, rigid_error
-from .images import IMAGE_EXTENSIONS, check_masks, check_sizes, has_alpha, read_coverage, read_image, read_mask
-from .scene_box import is_forward_facing, ndc_box, world_box
+from .images import (
+    IMAGE_EXTENSIONS,
+    check_sizes,
+    has_alpha,
+    is_linear,
+    mask_folder_paths,
+    read_coverage,
+    read_image,
+    read_masks,
+)
+from .lens import LensError, lens_from_opencv_keys
+from .points import read_ply
+from .scene_box import capture_box
 from .types import Dataset, DatasetError
 
 # Frame keys read elsewhere with another meaning: refusing them beats guessing.
 AMBIGUOUS_FRAME_KEYS = {
     "mask_path": "nerfstudio's 'mask_path' marks pixels to ignore; object masks go in 'object_mask_path'",
-    "fl_x": "per-frame intrinsics are not supported; give them once at the top level",
-    "fl_y": "per-frame intrinsics are not supported; give them once at the top level",
-    "camera_angle_x": "per-frame intrinsics are not supported; give them once at the top level",
-    "cx": "per-frame intrinsics are not supported; give them once at the top level",
-    "cy": "per-frame intrinsics are not supported; give them once at the top level",
 }
+INTRINSIC_KEYS = ("camera_model", "camera_angle_x", "fl_x", "fl_y", "cx", "cy", "w", "h",
+                  "k1", "k2", "k3", "k4", "p1", "p2")
 SPLIT_FILES = (("transforms_train.json", "train"), ("transforms_test.json", "test"), ("transforms_val.json", "test"))
 
 
@@ -72,35 +87,49 @@ def _resolve(base, rel, what, path):
     raise DatasetError(f"{path}: {what} '{rel}' not found (looked for {p})")
 
 
-def _intrinsics(meta, path, width, height):
-    """(fx, cx, cy) in pixels for images of the given size."""
-    w = meta.get("w", width)
-    h = meta.get("h", height)
-    if (w, h) != (width, height):
+def _lens(d, path, width, height, factor):
+    """Pinhole intrinsics (fx, cx, cy) and a resampling function for views of ``d``'s intrinsics (the
+    top level merged with a frame's own keys) read as ``width`` x ``height`` images."""
+    w, h = d.get("w", width), d.get("h", height)
+    scale = width / w
+    if factor is None and (w, h) != (width, height):
         raise DatasetError(f"{path}: says images are {w}x{h} but they are {width}x{height}")
-    fx = None
-    if "fl_x" in meta:
-        fx = float(meta["fl_x"])
-        fy = float(meta.get("fl_y", fx))
-        if abs(fx - fy) > 1e-3 * fx:
-            raise DatasetError(f"{path}: fl_x = {fx} and fl_y = {fy} differ; non-square pixels are not supported")
-    if "camera_angle_x" in meta:
-        angle = float(meta["camera_angle_x"])
+    if abs(h * scale - height) > 1.0:
+        raise DatasetError(f"{path}: images of {width}x{height} are not {w}x{h} scaled by one factor")
+    keys = dict(d)
+    if "camera_angle_x" in d:
+        angle = float(d["camera_angle_x"])
         if not 0 < angle < np.pi:
             raise DatasetError(f"{path}: camera_angle_x must be in (0, pi) radians, got {angle}")
-        fa = 0.5 * width / np.tan(0.5 * angle)
-        if fx is not None and abs(fa - fx) > 1e-3 * fx:
+        fa = 0.5 * w / np.tan(0.5 * angle)
+        if "fl_x" in d and abs(fa - float(d["fl_x"])) > 1e-3 * fa:
             raise DatasetError(f"{path}: camera_angle_x gives a focal length of {fa:.3f} px but fl_x is "
-                               f"{fx:.3f}; the intrinsics are ambiguous")
-        fx = fa
-    if fx is None:
+                               f"{float(d['fl_x']):.3f}; the intrinsics are ambiguous")
+        keys["fl_x"] = fa
+    if "fl_x" not in keys:
         raise DatasetError(f"{path}: no intrinsics (camera_angle_x or fl_x)")
-    if not (np.isfinite(fx) and fx > 0):
-        raise DatasetError(f"{path}: the focal length must be a positive number of pixels, got {fx}")
-    return fx, float(meta.get("cx", 0.5 * width)), float(meta.get("cy", 0.5 * height))
+    keys.setdefault("cx", 0.5 * w)
+    keys.setdefault("cy", 0.5 * h)
+    try:
+        lens = lens_from_opencv_keys(d.get("camera_model", "OPENCV"), keys)
+    except (LensError, TypeError, ValueError) as e:
+        raise DatasetError(f"{path}: {e}") from None
+    if not all(np.isfinite(v) and v > 0 for v in (lens.fx, lens.fy)):
+        raise DatasetError(f"{path}: the focal length must be a positive number of pixels, got {lens.fx}")
+    return lens.scaled(scale).undistorter(width, height)
 
 
-def load_transforms(root, holdout=8):
+def _image_path(root, base, frame, path, factor):
+    """The frame's image; with ``factor`` K > 1, ``images_K/NAME`` beside the JSON (nerfstudio)."""
+    if not factor or factor == 1:
+        return _resolve(base, frame["file_path"], "image", path)
+    folder = os.path.join(root, f"images_{factor}")
+    if not os.path.isdir(folder):
+        raise DatasetError(f"{folder}: no such image folder (--factor {factor} reads images_{factor}/)")
+    return _resolve(folder, os.path.basename(frame["file_path"]), "image", path)
+
+
+def load_transforms(root, holdout=8, factor=None):
     files = json_files(root)
     metas = [(_load_json(p), p, s) for p, s in files]
     top = metas[0][0]
@@ -118,14 +147,26 @@ def load_transforms(root, holdout=8):
     base = {path: os.path.dirname(path) for _, path, _ in metas}
     names, paths, images, cameras, splits = [], [], [], [], []
     for k, (frame, path, split) in enumerate(frames):
-        p = _resolve(base[path], frame["file_path"], "image", path)
+        p = _image_path(root, base[path], frame, path, factor)
         names.append(os.path.basename(p))
         paths.append(p)
         images.append(read_image(p, background))
     check_sizes(images, paths)
     h, w = images[0].shape[:2]
-    fx, cx, cy = _intrinsics(top, metas[0][1], w, h)
+    lenses, resamplers = {}, []
+    for frame, path, _ in frames:
+        d = {key: (frame if key in frame else top)[key] for key in INTRINSIC_KEYS if key in frame or key in top}
+        tag = json.dumps(d, sort_keys=True)
+        if tag not in lenses:
+            lenses[tag] = _lens(d, path, w, h, factor)
+        resamplers.append(lenses[tag])
+    images = [r[1](img) for r, img in zip(resamplers, images)]
+    notes = []
+    if any(r[1].__name__ != "_identity" for r in resamplers):
+        notes.append(f"{len(frames)} views undistorted to pinhole cameras ({top.get('camera_model', 'OPENCV')} "
+                     "lens model)")
     for k, (frame, path, split) in enumerate(frames):
+        fx, cx, cy = resamplers[k][0]
         m = np.asarray(frame["transform_matrix"], dtype=np.float64)
         if m.shape not in ((4, 4), (3, 4)) or not np.all(np.isfinite(m)):
             raise DatasetError(f"{path}: frame {k} ({names[k]}) has a non-finite or malformed transform_matrix")
@@ -138,46 +179,50 @@ def load_transforms(root, holdout=8):
         splits.append(split)
     if any(s is None for s in splits):
         splits = ["test" if holdout and k % holdout == 0 else "train" for k in range(len(frames))]
-    masks = _masks(root, frames, base, paths, (h, w))
+    undistort = [r[1] for r in resamplers]
+    masks, masked = _masks(root, frames, base, paths, (h, w), factor, undistort, notes)
     ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names, images=np.stack(images),
-                 cameras=cameras, split=np.array(splits), box=None, masks=masks,
-                 meta={"format": "transforms", "files": [p for p, _ in files]})
+                 cameras=cameras, split=np.array(splits), box=None, masks=masks, masked=masked,
+                 meta={"format": "transforms", "files": [p for p, _ in files], "notes": notes,
+                       "color_space": "linear (encoded with the sRGB curve)" if is_linear(paths[0]) else "sRGB"})
     if has_alpha(paths[0]):  # RGBA composited over a known colour: what rays see beyond the scene
         ds.meta["background_color"] = background.tolist()
-    ds.coverage = _optional(frames, base, "coverage_path", read_coverage, (h, w))
-    ds.backgrounds = _optional(frames, base, "background_path", lambda p: read_image(p, background), (h, w))
-    ds.moved = _optional(frames, base, "moved_path", lambda p: read_image(p, background), (h, w))
+    ds.coverage = _optional(frames, base, "coverage_path", read_coverage, (h, w), undistort)
+    ds.backgrounds = _optional(frames, base, "background_path", lambda p: read_image(p, background), (h, w), undistort)
+    ds.moved = _optional(frames, base, "moved_path", lambda p: read_image(p, background), (h, w), undistort)
     if "moved_transform" in top:
         ds.moved_transform = np.asarray(top["moved_transform"], np.float64)
-    ds.box = _box(top, cameras, metas[0][1])
+    if "applied_transform" in top:
+        applied = np.eye(4)
+        applied[:3, :4] = np.asarray(top["applied_transform"], np.float64)[:3, :4]
+        ds.meta["applied_transform"] = applied.tolist()
+    if "ply_file_path" in top:
+        ds.points = read_ply(_resolve(base[metas[0][1]], top["ply_file_path"], "ply_file_path", metas[0][1]))
+    ds.box, ds.near_far = _box(top, cameras, metas[0][1], ds.points, notes)
     if "aabb" in top:
         ds.meta["aabb"] = True  # a bounded scene: fitting keeps its world box
-    if ds.box.kind == "ndc":
-        ds.near_far = np.array([[float(top["near"]), float(top["far"])]])
     return ds
 
 
-def _masks(root, frames, base, paths, shape):
+def _masks(root, frames, base, paths, shape, factor, undistort, notes):
+    """Object masks (object_mask_path, else ``masks/`` by file stem; with ``factor`` K, ``masks_K/``
+    when present), resized to the images when they are K times larger, undistorted as the images."""
     if any("object_mask_path" in f for f, _, _ in frames):
-        mpaths = []
-        for k, (frame, path, _) in enumerate(frames):
-            if "object_mask_path" not in frame:
-                raise DatasetError(f"{path}: frame {k} has no 'object_mask_path' while others do")
-            mpaths.append(_resolve(base[path], frame["object_mask_path"], "mask", path))
-    elif os.path.isdir(os.path.join(root, "masks")):
-        folder = os.path.join(root, "masks")
-        by_stem = {os.path.splitext(f)[0]: f for f in os.listdir(folder)}
-        mpaths = [os.path.join(folder, by_stem.get(os.path.splitext(os.path.basename(p))[0],
-                                                   os.path.basename(p))) for p in paths]
+        mpaths = [_resolve(base[path], frame["object_mask_path"], "mask", path) if "object_mask_path" in frame
+                  else None for frame, path, _ in frames]
     else:
-        return None
-    masks = [read_mask(p, "white") for p in mpaths]
-    check_masks(masks, mpaths, shape)
-    return np.stack(masks)
+        mpaths = mask_folder_paths(root, paths, factor)
+        if mpaths is None:
+            return None, None
+    masks, masked = read_masks(mpaths, "white", shape, notes, resize=bool(factor and factor > 1))
+    if masks is not None:
+        masks = np.stack([u(m, nearest=True) for u, m in zip(undistort, masks)])
+    return masks, masked
 
 
-def _optional(frames, base, key, reader, shape):
-    """Per-view ground truth where frames have ``key``; NaN for the others; None if none has it."""
+def _optional(frames, base, key, reader, shape, undistort):
+    """Per-view ground truth where frames have ``key`` (undistorted as the images); NaN for the others;
+    None if none has it."""
     if not any(key in f for f, _, _ in frames):
         return None
     out = []
@@ -190,23 +235,17 @@ def _optional(frames, base, key, reader, shape):
             out.append(img)
         else:
             out.append(None)
+    out = [o if o is None else u(o) for o, u in zip(out, undistort)]
     like = next(o for o in out if o is not None)
     return np.stack([o if o is not None else np.full_like(like, np.nan) for o in out])
 
 
-def _box(top, cameras, path):
-    forward = top.get("forward_facing")
-    if forward is None:
-        forward = is_forward_facing(cameras)
-    if forward:
-        near = float(top.get("near", 0.0)) or None
-        far = float(top.get("far", 0.0)) or None
-        if near is None or far is None:
-            raise DatasetError(f"{path}: a forward-facing transforms.json needs 'near' and 'far' depth bounds")
-        return ndc_box(cameras, near, far)
+def _box(top, cameras, path, points, notes):
+    """(scene box, near/far bounds or None): :func:`~mi_voldis.data.scene_box.capture_box`."""
+    aabb = None
     if "aabb" in top:
         aabb = np.asarray(top["aabb"], np.float64)
         if aabb.shape != (2, 3) or not np.all(aabb[1] > aabb[0]):
             raise DatasetError(f"{path}: 'aabb' must be [[x0, y0, z0], [x1, y1, z1]] with x1 > x0 etc.")
-        return SceneBox("world", aabb[0], aabb[1])
-    return world_box(cameras)
+    return capture_box(cameras, points, path, notes, top.get("forward_facing"), float(top.get("near", 0.0)),
+                       float(top.get("far", 0.0)), aabb)

@@ -16,9 +16,13 @@ class Dataset:
     """Posed images of one scene and a mask of one object per view.
 
     ``images``: (N, H, W, 3) float32 in [0, 1], display-encoded (sRGB) as stored in the files;
-    ``masks``: (N, H, W) bool (object = True) or None; ``split``: per-view 'train' or 'test';
+    ``masks``: (N, H, W) bool (object = True) or None; ``masked``: (N,) bool, False for views that came
+    without a mask (their mask is all True: they train the full field only, nothing of the background)
+    or None when every view has one; ``split``: per-view 'train' or 'test';
     ``backgrounds``/``moved``: ground truth without the object / with it moved by
     ``moved_transform`` (None where the dataset has none; NaN images for views without them).
+    ``points``: (P, 3) sparse world points of the capture (COLMAP, ``ply_file_path``) or None.
+    ``meta['notes']``: lines for the user about how the files were read (printed by the fit).
     ``meta['background_color']``: set when RGBA images were composited over that colour (what a ray
     leaving the scene sees); absent for captures where every ray ends on a surface."""
     name: str
@@ -34,6 +38,8 @@ class Dataset:
     backgrounds: np.ndarray | None = None
     moved: np.ndarray | None = None
     moved_transform: np.ndarray | None = None
+    masked: np.ndarray | None = None
+    points: np.ndarray | None = None
     meta: dict = field(default_factory=dict)
 
     def __repr__(self):
@@ -48,6 +54,13 @@ class Dataset:
     @property
     def test(self):
         return np.flatnonzero(self.split == "test")
+
+    @property
+    def masked_train(self):
+        """Training views with an object mask of their own (those the background and the hull learn from)."""
+        if self.masks is None:
+            return np.zeros(0, np.int64)
+        return self.train if self.masked is None else self.train[self.masked[self.train]]
 
     @property
     def size(self):

@@ -20,7 +20,7 @@ def hull_region(inputs, field, neighbours):
     inside = np.zeros(len(pts_scene), bool)
     pts_world = inputs.space.to_world_np(pts_scene[real])
     diag = np.hypot(*ds.size)
-    inside[real] = visual_hull(pts_world, [ds.cameras[v] for v in ds.train], ds.masks[ds.train],
+    inside[real] = visual_hull(pts_world, [ds.cameras[v] for v in ds.masked_train], ds.masks[ds.masked_train],
                                int(np.ceil(cfg.hull_dilation * diag)), cfg.hull_min_views)
     grown = dilate_vertices(mi.Bool(inside), neighbours, 2) & mi.Bool(real)
     return dr.select(grown, 1.0, 0.0), pts_scene[np.array(grown)]
@@ -35,7 +35,7 @@ def start_cleared(inputs, state):
     from .lift import keys_mask, object_ray_keys, training_depths
     full = state.fields["full"]
     depth = training_depths(inputs, state)
-    carved = object_ray_keys(inputs, full, depth, depth)
+    carved = object_ray_keys(inputs, full, [v for v in depth if v in set(inputs.ds.masked_train)], depth)
     hull, state.hull_points = hull_region(inputs, full, neighbour_vertices(full))
     state.fields["bg"] = emptied(inputs, full, never_seen(inputs, full, hull > 0, depth) | keys_mask(full, carved))
     return carved

@@ -135,7 +135,7 @@ def object_ray_keys(inputs, field, views, depth, dilation=0.01, reach=0.9, fract
     that is not the background's is the object's, wherever the visual hull ends."""
     ds = inputs.ds
     grow = int(np.ceil(dilation * np.hypot(*ds.size)))
-    cams, masks = [ds.cameras[u] for u in ds.train], ds.masks[ds.train]
+    cams, masks = [ds.cameras[u] for u in ds.masked_train], ds.masks[ds.masked_train]
 
     def objectish(points):
         return visual_hull(points, cams, masks, grow, fraction)
@@ -199,9 +199,9 @@ def reference_views(ds, count, min_share=0.5):
     """Up to ``count`` training views to inpaint: the one with the largest mask, then in turn the view
     farthest from those already picked among the views whose mask is at least ``min_share`` of the
     largest (the object seen well from around it)."""
-    train = list(ds.train)
+    train = list(ds.masked_train)
     area = np.array([ds.masks[v].sum() for v in train], np.float64)
-    if not area.any():
+    if not len(area) or not area.any():
         return []
     pool = [v for v, a in zip(train, area) if a >= min_share * area.max()]
     centre = {v: np.asarray(ds.cameras[v].to_world, np.float64)[:3, 3] for v in pool}

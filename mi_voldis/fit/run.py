@@ -6,6 +6,7 @@ RUN/ holds the fields (``<role>_grid.npz``), ``scene.xml`` (renders them through
 RUN.partial/checkpoints/last.npz after a crash or kill -9.
 """
 import os
+import sys
 import time
 
 import numpy as np
@@ -23,20 +24,29 @@ PREVIEW = "previews"
 CHECKPOINT = os.path.join("checkpoints", "last.npz")
 
 
-def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto", holdout=8, keep_checkpoints=False):
+def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto", holdout=8, keep_checkpoints=False,
+            factor=None):
     """Fit the dataset at ``dataset_path`` into the run folder ``out``; returns the metrics.
     ``keep_checkpoints``: the finished run keeps ``checkpoints/last.npz`` (its final state, from which
     :mod:`mi_voldis.bench.strategies` refits the background another way)."""
     cfg = cfg or FitConfig()
     with staged(out, resume, keep_checkpoints) as stage:
-        dataset = load_dataset(dataset_path, fmt, holdout)
-        record = {"path": os.path.abspath(dataset_path), "format": dataset.meta["format"], "holdout": holdout}
+        dataset = load_dataset(dataset_path, fmt, holdout, factor)
+        for line in dataset.meta.get("notes", []) if progress else ():
+            print(f"note: {line}", file=sys.stderr)
+        record = dataset_record(dataset_path, dataset, holdout, factor)
         write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": record})
         t0 = time.perf_counter()
         inputs, state = fit(dataset, os.path.join(stage, CHECKPOINT), cfg, resume=resume, progress=progress)
         fit_seconds = time.perf_counter() - t0
         metrics = write_run(stage, inputs, state, fit_seconds)
     return metrics
+
+
+def dataset_record(path, dataset, holdout, factor):
+    """What ``config.json`` records of the dataset: enough to load it again as the fit saw it."""
+    return {"path": os.path.abspath(path), "format": dataset.meta["format"], "holdout": holdout, "factor": factor,
+            "color_space": dataset.meta.get("color_space", "sRGB"), "notes": dataset.meta.get("notes", [])}
 
 
 def write_run(stage, inputs, state, fit_seconds):

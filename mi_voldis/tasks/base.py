@@ -32,6 +32,14 @@ from ..scene import build_integrator, load_scene, write_scene
 PREVIEW_VIEWS = 3
 
 
+def load_recorded(record, path=None):
+    """The dataset a run's ``config.json`` record names, loaded as the fit loaded it (format, holdout,
+    downscale factor); ``path``: another folder, with the same holdout and factor."""
+    same = path is None or os.path.abspath(path) == record.get("path")
+    return load_dataset(path or record.get("path"), record.get("format", "auto") if same else "auto",
+                        record.get("holdout", 8), record.get("factor"))
+
+
 class FittedRun:
     """A fitting run folder: its dataset, fields and integrator properties."""
 
@@ -53,8 +61,7 @@ class FittedRun:
         record = self.config.get("dataset") or {}
         record = record if isinstance(record, dict) else {"path": record}
         try:
-            self.dataset = load_dataset(dataset or record.get("path"), record.get("format", "auto"),
-                                        record.get("holdout", 8))
+            self.dataset = load_recorded(record, dataset)
         except DatasetError as e:
             raise ValueError(f"{run_dir}: its dataset cannot be loaded ({e}); pass --dataset") from None
         base = load_scene(scene).integrator()
