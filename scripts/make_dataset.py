@@ -2,11 +2,14 @@
 
     python scripts/make_dataset.py scenes/NAME.xml --out data/NAME [--views N --res WxH --spp S --seed K]
     python scripts/make_dataset.py --random SEED --out data/random_SEED [--views N --res WxH --spp S]
+    python scripts/make_dataset.py scenes/NAME.xml --out data/NAME_spinnerf --layout spinnerf [--views 100]
 
 The rig (cameras, resolution, the "moved" edit) comes from scenes/NAME.json; the flags override it.
 --random composes a scene from the seed (mi_voldis/synth/random_scene.py: layout, object parts,
 materials, a mirror sometimes, an occluder sometimes, a shadow-casting light, a 360-degree or
-forward-facing rig) and keeps it in the dataset's scene/ folder.
+forward-facing rig) and keeps it in the dataset's scene/ folder. --layout spinnerf writes SPIn-NeRF's
+LLFF layout: the first 40% of the views by name without the object (images_4/test_label/ marks where
+it stood), the rest with it (images_4/label/).
 """
 import argparse
 import os
@@ -25,6 +28,8 @@ def main(argv=None):
     ap.add_argument("--spp", type=positive, help="path-tracing samples per pixel")
     ap.add_argument("--seed", type=int, default=0, help="random seed (the output is deterministic for it)")
     ap.add_argument("--holdout", type=int, default=8, help="every k-th view is a test view")
+    ap.add_argument("--layout", default="transforms", choices=("transforms", "spinnerf"),
+                    help="transforms.json with every ground truth, or SPIn-NeRF's removal layout")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
     add_debug(ap)
     args = ap.parse_args(argv)
@@ -48,7 +53,8 @@ def main(argv=None):
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
     from mi_voldis.synth.make import make_dataset
     if args.scene is not None:
-        print(make_dataset(args.scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout))
+        print(make_dataset(args.scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout,
+                           layout=args.layout))
         return
     import tempfile
 
@@ -56,7 +62,7 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as folder:
         scene = write_random_scene(args.random, folder, args.views)
         print(make_dataset(scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout,
-                           scene_folder=folder))
+                           scene_folder=folder, layout=args.layout))
 
 
 if __name__ == "__main__":

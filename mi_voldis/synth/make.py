@@ -6,6 +6,11 @@ the object emitting 1, direct visibility only, box filter) and the binary mask f
 views the ground truth with the object moved by the rig's stated transform. Writes transforms.json
 (keys of :mod:`mi_voldis.data.transforms_json`) and, for forward-facing rigs, poses_bounds.npy.
 Deterministic for a seed.
+
+``layout='spinnerf'`` writes SPIn-NeRF's removal-benchmark layout instead (LLFF): the first
+:data:`SPINNERF_TEST_SHARE` of the views by name photographed without the object (the ground truth)
+with ``images_4/test_label/`` marking where it stood, the rest with the object and its masks in
+``images_4/label/`` (255 = object), and ``poses_bounds.npy`` for all views from one rig.
 """
 import json
 import os
@@ -24,6 +29,9 @@ from ..transforms import compose, to_scalar_transform
 from . import rigs, variants
 
 PASSES = ("image", "coverage", "background", "moved")
+LAYOUTS = ("transforms", "spinnerf")
+SPINNERF_TEST_SHARE = 0.4  # SPIn-NeRF: 40 of 100 views are taken after the object was carried away
+SPINNERF_FOLDER = "images_4"
 
 
 def load_rig(scene_path):
@@ -88,9 +96,12 @@ def depth_bounds(root, cameras, width, height):
 
 
 def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0, holdout=8, progress=True,
-                 scene_folder=None):
+                 scene_folder=None, layout="transforms"):
     """Render the dataset of ``scene_path`` into ``out`` (see the module docstring); returns ``out``.
-    ``scene_folder``: a folder copied into the dataset as ``scene/`` (e.g. a generated scene)."""
+    ``scene_folder``: a folder copied into the dataset as ``scene/`` (e.g. a generated scene);
+    ``layout``: 'transforms' (with every ground truth) or 'spinnerf'."""
+    if layout not in LAYOUTS:
+        raise ValueError(f"unknown dataset layout '{layout}' (expected {' or '.join(LAYOUTS)})")
     rig = load_rig(scene_path)
     root = variants.parse(scene_path)
     prefix = rig.get("object_prefix", "object")
@@ -109,10 +120,16 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
               "background": variants.without_object(root, prefix),
               "moved": variants.moved(root, prefix, moved_matrix)}
 
+    if layout == "spinnerf":
+        split = ["train"] * views  # no moved ground truth
+        cameras = spinnerf_order(cameras)
     with staged(out) as tmp:
         if scene_folder is not None:
             shutil.copytree(scene_folder, os.path.join(tmp, "scene"))
         _render_views(tmp, scene_path, scenes, cameras, split, width, height, spp, seed, progress)
+        if layout == "spinnerf":
+            _spinnerf(tmp, cameras, depth_bounds(scenes["image"], cameras, width, height))
+            return out
         frames = []
         for k, (cam, name) in enumerate(zip(cameras, _names(views))):
             frame = {"file_path": f"images/{name}", "transform_matrix": mitsuba_to_opengl(cam.to_world).tolist(),
@@ -133,6 +150,35 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
         with open(os.path.join(tmp, "transforms.json"), "w") as f:
             json.dump(meta, f, indent=1)
     return out
+
+
+def spinnerf_tests(n):
+    """Indices of the rig's object-free test views: :data:`SPINNERF_TEST_SHARE` of ``n``, spread evenly
+    over the rig (as a re-shot trajectory is) rather than one end of it."""
+    return [int(k) for k in np.unique(np.round(np.linspace(0, n - 1, int(round(SPINNERF_TEST_SHARE * n)))))]
+
+
+def spinnerf_order(cameras):
+    """The rig's cameras with the test views (:func:`spinnerf_tests`) first."""
+    tests = spinnerf_tests(len(cameras))
+    return [cameras[k] for k in tests + [k for k in range(len(cameras)) if k not in tests]]
+
+
+def _spinnerf(folder, cameras, bounds):
+    """Rearrange the rendered passes into SPIn-NeRF's layout (see the module docstring)."""
+    names = _names(len(cameras))
+    tests = len(spinnerf_tests(len(cameras)))
+    target = os.path.join(folder, SPINNERF_FOLDER)
+    for sub in ("label", "test_label"):
+        os.makedirs(os.path.join(target, sub))
+    for k, name in enumerate(names):
+        photo = "backgrounds" if k < tests else "images"
+        os.replace(os.path.join(folder, photo, name), os.path.join(target, name))
+        os.replace(os.path.join(folder, "masks", name),
+                   os.path.join(target, "test_label" if k < tests else "label", name))
+    for sub in ("images", "masks", "coverage", "backgrounds", "moved"):
+        shutil.rmtree(os.path.join(folder, sub))
+    write_llff(folder, cameras, bounds)
 
 
 def _names(views):

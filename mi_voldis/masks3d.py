@@ -1,0 +1,171 @@
+"""Object masks for every view from the masks of a few views, or from a world-space box.
+
+Both start from the full field's surface: in each view v, pixel i with opacity above a half has the
+surface point x = o + D_v(i) d (D_v: the full field's depth, distance along the pixel's ray, in world
+units whatever the scene space). The mask of view v is the set of pixels whose surface point is the
+object's, so whatever stands in front of the object stays unmasked.
+
+* A box [lo, hi] (world units): x is the object's when lo <= x <= hi.
+* Masks M_g of a few views g: x is surely the object's when it lies in their visual hull (it projects
+  inside M_g, grown by ``grow`` pixels, in every given view whose frame holds it) and some given view
+  sees it (its distance from camera g is within ``tol`` of D_g there). It may be the object's when it
+  lies in the hull behind the surface every given view sees there, by less than the object's size:
+  the object's far side, which no given view sees, or a surface behind the object (the floor it stands
+  on), which 3D alone cannot tell apart from few views. The object's size is the diagonal of the box
+  around the surface points the given masks cover. With the photos, OpenCV's GrabCut settles the
+  "maybe" pixels of each view by colour and image edges (sure pixels fixed, the hull's outside fixed
+  as background); without them they count as the object's. Given views keep their given masks.
+"""
+import os
+
+import cv2
+import numpy as np
+
+from .cameras import project
+from .fit.hull import visual_hull
+from .fit.visibility import pixel_points
+from .metrics import dilate, iou
+from .render.views import render_camera
+
+
+def surfaces(integrator, cameras, min_alpha=0.5):
+    """Per camera, the full field's (depth (H, W), where it is opaque enough (H, W) bool)."""
+    out = []
+    for cam in cameras:
+        _, alpha, depth = render_camera(integrator, cam, ("full",))["full"]
+        out.append((depth, (alpha > min_alpha) & np.isfinite(depth) & (depth > 0)))
+    return out
+
+
+def _points(camera, depth, valid):
+    pixels = np.flatnonzero(valid)
+    return pixels, pixel_points(camera, depth, pixels)
+
+
+def box_masks(cameras, surf, lo, hi):
+    """Per view, the pixels whose surface point lies in the world box [lo, hi]."""
+    out = []
+    for cam, (depth, valid) in zip(cameras, surf):
+        pixels, x = _points(cam, depth, valid)
+        m = np.zeros(depth.size, bool)
+        m[pixels[np.all((x >= lo) & (x <= hi), axis=1)]] = True
+        out.append(m.reshape(depth.shape))
+    return out
+
+
+def _depth_gap(points, camera, depth):
+    """Per point: its distance from ``camera`` minus the surface distance the camera sees at its pixel
+    (NaN where it is outside the frame or behind the camera)."""
+    px, py, z = project(camera, points)
+    ix, iy = np.floor(px).astype(np.int64), np.floor(py).astype(np.int64)
+    ok = (z > 0) & (ix >= 0) & (ix < camera.width) & (iy >= 0) & (iy < camera.height)
+    gap = np.full(len(points), np.nan)
+    dist = np.linalg.norm(points - np.asarray(camera.to_world)[:3, 3], axis=1)
+    gap[ok] = dist[ok] - depth[iy[ok], ix[ok]]
+    return gap, dist
+
+
+def view_masks(cameras, surf, given, grow=0, tol=0.05, images=None):
+    """Per view, the object's visible pixels from ``given`` {view index: mask (H, W) bool} (see the
+    module docstring); with ``images``, each view's undecided pixels are settled by colour
+    (:func:`settle_by_colour`)."""
+    g_views = sorted(given)
+    g_cams = [cameras[g] for g in g_views]
+    g_masks = np.stack([given[g] for g in g_views])
+    seeds = np.concatenate([pixel_points(cameras[g], surf[g][0], np.flatnonzero(given[g] & surf[g][1]))
+                            for g in g_views])
+    size = float(np.linalg.norm(np.percentile(seeds, 98, axis=0) - np.percentile(seeds, 2, axis=0))) if len(
+        seeds) else 0.0
+    out = []
+    for cam, (depth, valid) in zip(cameras, surf):
+        pixels, x = _points(cam, depth, valid)
+        inside = visual_hull(x, g_cams, g_masks, grow, 1.0)
+        seen = np.zeros(len(x), bool)
+        behind_all = np.ones(len(x), bool)
+        for g in g_views:
+            gap, dist = _depth_gap(x, cameras[g], surf[g][0])
+            framed = np.isfinite(gap)  # a view without the point in its frame says nothing
+            seen[framed] |= np.abs(gap[framed]) <= tol * dist[framed]
+            behind_all[framed] &= (gap[framed] > tol * dist[framed]) & (gap[framed] < size)
+        sure = np.zeros(depth.size, bool)
+        maybe = np.zeros(depth.size, bool)
+        sure[pixels[inside & seen]] = True
+        maybe[pixels[inside & behind_all & ~seen]] = True
+        sure, maybe = sure.reshape(depth.shape), maybe.reshape(depth.shape)
+        v = len(out)
+        if v in given:
+            out.append(given[v])
+        elif images is not None and maybe.any():
+            out.append(settle_by_colour(images[v], sure, maybe))
+        else:
+            out.append(sure | maybe)
+    return out
+
+
+def settle_by_colour(image, sure, maybe, iterations=5):
+    """Object mask of one view whose pixels are ``sure`` (a given view sees them on the object),
+    ``maybe`` (the object's far side, or a surface behind it: 3D cannot tell) or background: OpenCV's
+    GrabCut (colour models of object and background, and image edges) decides the ``maybe`` pixels."""
+    gc = np.full(sure.shape, cv2.GC_BGD, np.uint8)
+    gc[maybe] = cv2.GC_PR_FGD
+    gc[sure] = cv2.GC_FGD
+    ring = dilate(sure | maybe, 3) & ~(sure | maybe)
+    gc[ring] = cv2.GC_PR_BGD
+    img = np.round(np.clip(image, 0, 1) * 255).astype(np.uint8)[..., ::-1].copy()
+    bgd, fgd = np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64)
+    try:
+        cv2.grabCut(img, gc, None, bgd, fgd, iterations, cv2.GC_INIT_WITH_MASK)
+    except cv2.error:  # too few pixels of one kind for a colour model: keep the 3D answer
+        return sure | maybe
+    return (gc == cv2.GC_FGD) | (gc == cv2.GC_PR_FGD)
+
+
+def view_index(ds, key):
+    """The view named ``key``: an image file name, its stem, or an index."""
+    for k, name in enumerate(ds.names):
+        if key in (name, os.path.splitext(name)[0]):
+            return k
+    if key.isdigit() and int(key) < len(ds.names):
+        return int(key)
+    raise ValueError(f"{ds.root}: no view named '{key}' (views are named like {ds.names[0]})")
+
+
+def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=None, cfg=None, progress=True):
+    """Write an object mask for every view of the dataset at ``dataset`` into the folder ``out``
+    (``<image stem>.png``, white = object: what the loaders read from ``DATASET/masks/``), from
+    ``given`` {view name: mask file} or a world ``box`` (lo, hi), through the full field of the run
+    ``run_dir`` (fitted there first when it does not exist yet). Returns a summary; with ground-truth
+    coverage in the dataset, the masks' IoU against it."""
+    from .data import load_dataset
+    from .data.images import read_mask
+    from .fit.run import run_fit
+    from .io.images import write_png
+    from .io.run_folder import staged
+    from .tasks.base import FittedRun
+    ds = load_dataset(dataset, fmt, holdout=0, factor=factor)
+    masks = {}
+    for key, path in (given or {}).items():
+        v = view_index(ds, key)
+        masks[v] = read_mask(path, "white")
+        if masks[v].shape != tuple(ds.size):
+            raise ValueError(f"{path}: mask is {masks[v].shape[1]}x{masks[v].shape[0]} but the images are "
+                             f"{ds.size[1]}x{ds.size[0]}")
+        if not masks[v].any():
+            raise ValueError(f"{path}: the mask is empty")
+    if not os.path.isfile(os.path.join(run_dir, "scene.xml")):
+        run_fit(dataset, run_dir, cfg, progress=progress, fmt=fmt, factor=factor)
+    integrator = FittedRun(run_dir, dataset).integrator()
+    surf = surfaces(integrator, ds.cameras)
+    if box is not None:
+        result = box_masks(ds.cameras, surf, *box)
+    else:
+        result = view_masks(ds.cameras, surf, masks, images=ds.images)
+    with staged(out) as stage:
+        for name, m in zip(ds.names, result):
+            write_png(os.path.join(stage, os.path.splitext(name)[0] + ".png"), np.where(m, 255, 0).astype(np.uint8))
+    summary = {"masks": out, "views": len(result), "object_share": float(np.mean([m.mean() for m in result])),
+               "empty_views": int(sum(not m.any() for m in result))}
+    if ds.coverage is not None:
+        scores = [iou(m, c > 0.5) for v, (m, c) in enumerate(zip(result, ds.coverage)) if v not in masks]
+        summary["iou_vs_coverage"] = float(np.nanmean(scores))
+    return summary
