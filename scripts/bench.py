@@ -2,12 +2,14 @@
 
     python scripts/bench.py [--quick] [--work out/bench] [--report reports]
     python scripts/bench.py --removal [--work out/bench] [--report reports] [--scenes ...]
+    python scripts/bench.py --masks [--work out/bench] [--report reports] [--scenes ...]
     python scripts/bench.py --step-profile [--rays random|tiles]   (a training step by kernel, record on and off)
 
 Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
 PNG plots. --quick is a smoke run of a few minutes; the full run fits every bundled scene, capture and
 random seed with the default budgets (hours on 2 cores); --scenes picks some. --removal writes
-reports/removal.md instead: every background strategy on the bundled and random ground-truth scenes.
+reports/removal.md instead: every background strategy on the bundled and random ground-truth scenes;
+--masks writes reports/masks.md: masks from two views (scripts/make_masks.py) and removal with them.
 """
 import argparse
 import os
@@ -27,6 +29,8 @@ def main(argv=None):
                                      "runs in --work with the same settings are reused")
     ap.add_argument("--removal", action="store_true",
                     help="only the removal section: background strategies on the ground-truth scenes")
+    ap.add_argument("--masks", action="store_true",
+                    help="only the masks section: masks from two views, and removal with them")
     ap.add_argument("--variant", default="llvm_ad_rgb")
     args = ap.parse_args(argv)
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
@@ -39,12 +43,17 @@ def main(argv=None):
                           "no_record": step_profile(rays=args.rays, record=False)}, indent=1))
         return
     from mi_voldis.bench import report
-    from mi_voldis.bench.run import run_all, run_removal
+    from mi_voldis.bench.run import run_all, run_masks, run_removal
     scenes = args.scenes.split(",") if args.scenes else None
     if args.removal:
         results = run_removal(os.path.abspath(args.work), args.report, scenes)
         command = "python scripts/bench.py --removal" + (f" --scenes {args.scenes}" if args.scenes else "")
         print(report.write_removal(results, args.report, command))
+        return
+    if args.masks:
+        results = run_masks(os.path.abspath(args.work), args.report, scenes)
+        command = "python scripts/bench.py --masks" + (f" --scenes {args.scenes}" if args.scenes else "")
+        print(report.write_masks(results, args.report, command))
         return
     results = run_all(args.quick, os.path.abspath(args.work), args.report, scenes)
     command = "python scripts/bench.py" + (" --quick" if args.quick else "") + \

@@ -275,3 +275,57 @@ def _removal_sheet(run, strategies, path, views=3):
              for r in strategies.values()]
     write_png(path, contact_sheet([im for row in rows for im in row], columns=len(tests)))
     return os.path.basename(path)
+
+
+def write_masks(results, report_dir, command):
+    """reports/masks.md: masks from two views against exact coverage, and removal with them beside
+    removal with every true mask; a sheet per scene. Returns the file's path."""
+    os.makedirs(report_dir, exist_ok=True)
+    md = ["# Object masks from two views", "",
+          f"Run {results['date']} with `{command}` ({results['seconds'] / 60:.1f} min). Machine: "
+          f"{results['machine']['cpu']}, {results['machine']['cores']} cores; variant "
+          f"`{results['machine']['variant']}`.", "",
+          "Per scene, from the removal section's default fit (its full field): two training views get their "
+          "true masks (the first training view and the one whose optical axis is closest to 90 degrees "
+          "from it: `mi_voldis.bench.masks.given_views`), `scripts/make_masks.py` makes masks for every view "
+          "(`python -m mi_voldis.bench.masks RUN OUT`), scored against the exact visible coverage > 0.5 on "
+          "every other view; then the background is fitted again from the same full field with those masks "
+          "(default `bg_strategy`) and scored like the removal with every true mask (in-mask PSNR on the "
+          "held-out views, inside the true masks dilated by 3% of the diagonal).", "",
+          "| scene | given views | mask IoU mean | mask IoU min | removal in-mask PSNR, made masks | "
+          "with true masks | difference | seconds |", "|---|---|---|---|---|---|---|---|"]
+    for scene, row in results["scenes"].items():
+        made = row["removal"]["methods"]["volume"]["psnr_mask"]
+        true = row["removal_true_masks"]["methods"]["volume"]["psnr_mask"]
+        diff = None if made is None or true is None else made - true
+        md.append(f"| {scene} | {', '.join(row['given'])} | {_f(row['iou_mean'], 3)} | {_f(row['iou_min'], 3)} | "
+                  f"{_f(made, 2)} | {_f(true, 2)} | {_f(diff, 2)} | {row['wall_seconds']:.0f} |")
+    md.append("")
+    for scene, row in results["scenes"].items():
+        sheet = _masks_sheet(row, os.path.join(report_dir, f"masks_{scene}.png"))
+        if sheet:
+            md += [f"![{scene}]({sheet}) {scene}: rows photo, exact coverage > 0.5, made mask; columns: "
+                   "the three views of lowest IoU.", ""]
+    path = os.path.join(report_dir, "masks.md")
+    with open(path, "w") as f:
+        f.write("\n".join(md) + "\n")
+    return path
+
+
+def _masks_sheet(row, path, views=3):
+    import numpy as np
+
+    from ..data import load_dataset
+    from ..io.images import contact_sheet, display_to_uint8, write_png
+    truth_ds = load_dataset(row["data"])
+    made_ds = load_dataset(os.path.join(row["out"], "data"))
+    worst = sorted((v for v in row["per_view"] if v not in row["given"]), key=lambda n: row["per_view"][n])[:views]
+    idx = [truth_ds.names.index(n) for n in worst]
+    if not idx:
+        return None
+    truth = truth_ds.coverage > 0.5 if truth_ds.coverage is not None else truth_ds.masks
+    grey = lambda m: np.repeat(np.where(m, 255, 0).astype(np.uint8)[..., None], 3, axis=2)  # noqa: E731
+    tiles = [display_to_uint8(truth_ds.images[v]) for v in idx] + [grey(truth[v]) for v in idx] + \
+        [grey(made_ds.masks[v]) for v in idx]
+    write_png(path, contact_sheet(tiles, columns=len(idx)))
+    return os.path.basename(path)

@@ -15,6 +15,7 @@ their peak RSS.
 """
 import json
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -166,6 +167,40 @@ def run_removal(work, report_dir, scenes=None):
     results["seconds"] = time.perf_counter() - t0
     os.makedirs(report_dir, exist_ok=True)
     with open(os.path.join(report_dir, "removal.json"), "w") as f:
+        json.dump(results, f, indent=1, default=float)
+    return results
+
+
+def run_masks(work, report_dir, scenes=None):
+    """Masks from two views on every ground-truth scene (:mod:`mi_voldis.bench.masks`), from the removal
+    section's fits (made here when missing), beside the removal with every ground-truth mask."""
+    logs = os.path.join(work, "logs")
+    os.makedirs(logs, exist_ok=True)
+    names = [s for s in SCENES + [f"random{k}" for k in RANDOM_SEEDS] if not scenes or s in scenes]
+    results = {"machine": machine.describe(), "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "scenes": {}}
+    t0 = time.perf_counter()
+    for scene in names:
+        data = make_data(scene, os.path.join(work, "data", scene), logs, False)
+        run = fit(data, os.path.join(work, "runs", f"{scene}_0"), [], logs, keep=True)
+        base = os.path.join(work, "removal", scene, "harmonic")
+        if not os.path.isfile(os.path.join(base, "metrics.json")):
+            child(["-m", "mi_voldis.bench.strategies", run["out"], "harmonic", base],
+                  os.path.join(logs, f"removal_{scene}_harmonic.log"))
+        out = os.path.join(work, "masks", scene)
+        shutil.rmtree(out, ignore_errors=True)
+        args = ["-m", "mi_voldis.bench.masks", run["out"], out]
+        wall = child(args, os.path.join(logs, f"masks_{scene}.log"))
+        with open(os.path.join(out, "metrics.json")) as f:
+            row = json.load(f)
+        with open(os.path.join(out, "removal", "metrics.json")) as f:
+            row["removal"] = json.load(f)
+        with open(os.path.join(base, "metrics.json")) as f:
+            row["removal_true_masks"] = json.load(f)
+        results["scenes"][scene] = {**row, "wall_seconds": wall, "out": out, "data": data,
+                                    "command": "python " + " ".join(args)}
+    results["seconds"] = time.perf_counter() - t0
+    os.makedirs(report_dir, exist_ok=True)
+    with open(os.path.join(report_dir, "masks.json"), "w") as f:
         json.dump(results, f, indent=1, default=float)
     return results
 

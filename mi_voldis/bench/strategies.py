@@ -1,6 +1,6 @@
 """Removal by background strategy, from one fitted full field (the benchmark's removal section).
 
-    python -m mi_voldis.bench.strategies RUN STRATEGY OUT
+    python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET]
 
 RUN: a finished fit kept with ``--keep-checkpoints``; its final state's full field is reused, the
 background is fitted again with ``bg_strategy=STRATEGY`` (every other setting as RUN's config.json), and
@@ -8,7 +8,9 @@ OUT receives ``metrics.json`` and the background of each held-out view as PNG. S
 views against the ground-truth background (in-mask = masks dilated by ``hull_dilation``): PSNR inside
 the masks and outside them (beside the full field's outside them), the object's residue, the
 foreground coverage IoU and the view-to-view consistency; OpenCV's Telea and Navier-Stokes on each
-held-out view itself (they see the photo around the mask) beside them.
+held-out view itself (they see the photo around the mask) beside them. MASKED_DATASET: fit the
+background with that copy of RUN's dataset (other object masks, e.g. from scripts/make_masks.py);
+scores still use RUN's dataset and its ground-truth masks.
 """
 import json
 import os
@@ -51,7 +53,8 @@ def evaluate(ds, integrator, dilation_fraction):
 
 
 def main(argv=None):
-    run, strategy, out = (argv or sys.argv[1:])[:3]
+    argv = argv or sys.argv[1:]
+    run, strategy, out = argv[:3]
     from ..data import load_dataset
     from ..fit.config import FitConfig
     from ..fit.fields import fit_integrator
@@ -64,6 +67,7 @@ def main(argv=None):
         record = json.load(f)["dataset"]
     cfg = FitConfig.from_sources(os.path.join(run, "config.json"), [f'bg_strategy="{strategy}"'])
     ds = load_dataset(record["path"], record["format"], record["holdout"])
+    fit_ds = load_dataset(argv[3], record["format"], record["holdout"]) if len(argv) > 3 else ds
     os.makedirs(out, exist_ok=True)
     adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
     state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), adam)
@@ -75,7 +79,7 @@ def main(argv=None):
     checkpoint = os.path.join(out, "state.npz")
     state.save(checkpoint, "bg", 0)
     t0 = time.perf_counter()
-    inputs, state = fit(ds, checkpoint, cfg, resume=True, progress=False)
+    inputs, state = fit(fit_ds, checkpoint, cfg, resume=True, progress=False)
     seconds = time.perf_counter() - t0
     os.remove(checkpoint)
     rows, renders = evaluate(ds, fit_integrator(inputs, state), cfg.hull_dilation)
