@@ -95,7 +95,7 @@ def view_masks(cameras, surf, given, grow=0, tol=0.05, images=None):
         v = len(out)
         if v in given:
             out.append(given[v])
-        elif images is not None and maybe.any():
+        elif images is not None:
             out.append(settle_by_colour(images[v], sure, maybe))
         else:
             out.append(sure | maybe)

@@ -15,16 +15,20 @@ import sys
 
 import numpy as np
 
-ORTHOGONAL = 90.0  # degrees between the two given views' optical axes when the rig allows it
+ORTHOGONAL = 90.0  # degrees between the two given views' directions to the scene when the rig allows it
 
 
 def given_views(ds):
-    """The first training view, and the training view whose optical axis is closest to
-    :data:`ORTHOGONAL` degrees from its (on a forward-facing rig: the most turned one)."""
+    """The first training view, and the training view that sees the rig's common target (the point
+    nearest every optical axis) from the direction closest to :data:`ORTHOGONAL` degrees away from the
+    first's (on a forward-facing rig: the widest baseline)."""
+    from ..data.scene_box import look_at_point
     train = list(ds.train)
-    axis = {v: np.asarray(ds.cameras[v].to_world)[:3, 2] for v in train}
+    target = look_at_point([ds.cameras[v] for v in train])
+    way = {v: np.asarray(ds.cameras[v].to_world)[:3, 3] - target for v in train}
+    way = {v: w / np.linalg.norm(w) for v, w in way.items()}
     a = train[0]
-    angle = {v: np.degrees(np.arccos(np.clip(axis[v] @ axis[a], -1, 1))) for v in train[1:]}
+    angle = {v: np.degrees(np.arccos(np.clip(way[v] @ way[a], -1, 1))) for v in train[1:]}
     return a, min(angle, key=lambda v: abs(angle[v] - ORTHOGONAL))
 
 
