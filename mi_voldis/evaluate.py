@@ -9,8 +9,8 @@ with it, display-encoded in [0, 1], over three regions, as the removal literatur
 * ``mask``: the object's mask dilated by ``dilation`` of the image diagonal;
 * ``bbox``: the bounding box of that dilated mask (both images cropped to it).
 
-PSNR and SSIM (:mod:`mi_voldis.metrics`) in each; with a ``perceptual`` callable (LPIPS), that too on
-the whole image and on the box crop.
+PSNR and SSIM (:mod:`mi_voldis.metrics`) in each; with a ``perceptual`` callable (LPIPS,
+:mod:`mi_voldis.lpips`), that too on the whole image and on the box crop (at least 64 pixels a side).
 """
 import numpy as np
 
@@ -18,6 +18,7 @@ from .metrics import dilate, psnr, ssim
 from .render.views import render_camera
 
 REGIONS = ("image", "mask", "bbox")
+LPIPS_MIN = 64  # pixels a side below which LPIPS (AlexNet) is not computed
 
 
 def scored_views(ds):
@@ -41,9 +42,9 @@ def score_view(render, truth, mask, dil, perceptual=None):
            "psnr_bbox": psnr(render[box], truth[box])}
     crop = render[box].shape[:2]
     out["ssim_bbox"] = ssim(render[box], truth[box]) if min(crop) > 10 else None  # SSIM's window is 11 pixels
-    if perceptual is not None:
-        out["lpips_image"] = float(perceptual(render, truth))
-        out["lpips_bbox"] = float(perceptual(render[box], truth[box])) if min(crop) >= 32 else None
+    if perceptual is not None:  # AlexNet's stride and pooling need 64 pixels a side
+        out["lpips_image"] = float(perceptual(render, truth)) if min(render.shape[:2]) >= LPIPS_MIN else None
+        out["lpips_bbox"] = float(perceptual(render[box], truth[box])) if min(crop) >= LPIPS_MIN else None
     return out
 
 

@@ -27,6 +27,13 @@ def test_regions_of_an_error_patch():
         assert out[f"psnr_{name}"] == pytest.approx(-10 * np.log10(delta ** 2 * s), rel=1e-6)
     assert out["ssim_image"] > out["ssim_mask"] and out["ssim_bbox"] < 1
     assert score_view(truth, truth, mask, 2)["ssim_mask"] == pytest.approx(1.0)
+    calls = []
+    out = score_view(render, truth, mask, 2, perceptual=lambda a, b: calls.append(a.shape) or 0.5)
+    assert out["lpips_image"] is None and calls == []  # too small for AlexNet
+    big = np.repeat(np.repeat(render, 2, 0), 2, 1)
+    out = score_view(big, np.repeat(np.repeat(truth, 2, 0), 2, 1), np.repeat(np.repeat(mask, 2, 0), 2, 1), 2,
+                     perceptual=lambda a, b: calls.append(a.shape) or 0.5)
+    assert out["lpips_image"] == 0.5 and calls == [(80, 100, 3)] and out["lpips_bbox"] is None
 
 
 def test_evaluate_script(tiny_run, tiny_dataset, tmp_path, capsys):
