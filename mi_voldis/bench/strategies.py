@@ -19,6 +19,8 @@ import time
 
 import numpy as np
 
+PREVIEWS = 4  # held-out views previewed when the dataset has no ground truth to score
+
 
 def evaluate(ds, integrator, dilation_fraction):
     """Per-method rows (the volume's background, Telea, NS) and the volume's held-out renders."""
@@ -82,7 +84,11 @@ def main(argv=None):
     inputs, state = fit(fit_ds, checkpoint, cfg, resume=True, progress=False)
     seconds = time.perf_counter() - t0
     os.remove(checkpoint)
-    rows, renders = evaluate(ds, fit_integrator(inputs, state), cfg.hull_dilation)
+    integrator = fit_integrator(inputs, state)
+    rows, renders = evaluate(ds, integrator, cfg.hull_dilation)
+    if not renders:  # no ground truth: previews of the first held-out views all the same
+        from ..render.views import render_camera
+        renders = {v: render_camera(integrator, ds.cameras[v], ("bg",)) for v in list(ds.test)[:PREVIEWS]}
     for v, layers in renders.items():
         write_png(os.path.join(out, f"view{v:03d}_bg.png"), display_to_uint8(np.clip(layers["bg"][0], 0, 1)))
     write_json(os.path.join(out, "metrics.json"), {"strategy": strategy, "seconds": seconds, "methods": rows,
