@@ -293,13 +293,13 @@ def write_masks(results, report_dir, command):
           "(default `bg_strategy`) and scored like the removal with every true mask (in-mask PSNR on the "
           "held-out views, inside the true masks dilated by 3% of the diagonal).", "",
           "| scene | given views | mask IoU mean | mask IoU min | removal in-mask PSNR, made masks | "
-          "with true masks | difference | seconds |", "|---|---|---|---|---|---|---|---|"]
+          "with true masks | difference |", "|---|---|---|---|---|---|---|"]
     for scene, row in results["scenes"].items():
         made = row["removal"]["methods"]["volume"]["psnr_mask"]
         true = row["removal_true_masks"]["methods"]["volume"]["psnr_mask"]
         diff = None if made is None or true is None else made - true
         md.append(f"| {scene} | {', '.join(row['given'])} | {_f(row['iou_mean'], 3)} | {_f(row['iou_min'], 3)} | "
-                  f"{_f(made, 2)} | {_f(true, 2)} | {_f(diff, 2)} | {row['wall_seconds']:.0f} |")
+                  f"{_f(made, 2)} | {_f(true, 2)} | {_f(diff, 2)} |")
     md.append("")
     for scene, row in results["scenes"].items():
         sheet = _masks_sheet(row, os.path.join(report_dir, f"masks_{scene}.png"))
