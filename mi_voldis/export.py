@@ -1,12 +1,15 @@
-"""Render a ``voldis`` scene's sensors into layered EXRs and sRGB PNG previews."""
+"""Render a ``voldis`` scene's sensors into layered EXRs (:mod:`mi_voldis.compositing`) and PNG previews."""
 import os
+import shlex
+import sys
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .compositing import composite_channels, exr_header
 from .io.exr import write_exr
-from .io.images import contact_sheet, depth_to_uint8, display_to_linear_premultiplied, display_to_uint8, write_png
+from .io.images import contact_sheet, depth_to_uint8, linear_to_uint8, write_png
 
 PREVIEW_LAYERS = ("full", "bg", "fg")
 
@@ -30,37 +33,30 @@ def render_channels(scene, sensor=0, spp=None, seed=0):
     return {name: image[..., k] for k, name in enumerate(names) if name != "coverage"}
 
 
-def previews(channels, layers):
-    """uint8 previews: main image, each layer's colour (premultiplied, over black) and the depth."""
-    out = {"composite": display_to_uint8(np.stack([channels[c] for c in "RGB"], axis=-1))}
+def previews(linear, layers):
+    """uint8 previews of composited channels (:func:`~mi_voldis.compositing.composite_channels`): the
+    main image and each layer (premultiplied, over black, sRGB-encoded) and the depth."""
+    out = {"composite": linear_to_uint8(np.stack([linear[c] for c in "RGB"], axis=-1))}
     for layer in layers:
-        out[layer] = display_to_uint8(np.stack([channels[f"{layer}.{c}"] for c in "RGB"], axis=-1))
-    out["depth"] = depth_to_uint8(channels["depth.Z"], channels["A"])
+        out[layer] = linear_to_uint8(np.stack([linear[f"{layer}.{c}"] for c in "RGB"], axis=-1))
+    out["depth"] = depth_to_uint8(linear["depth.Z"], linear["A"])
     return out
 
 
-def linear_channels(channels):
-    """The same channels with every layer's colour converted to premultiplied linear light."""
-    out = dict(channels)
-    for prefix, alpha in [("", "A")] + [(f"{lay}.", f"{lay}.A") for lay in ("full", "bg", "fg", "res")]:
-        if f"{prefix}R" in channels:
-            rgb = np.stack([channels[f"{prefix}{c}"] for c in "RGB"], axis=-1)
-            lin = display_to_linear_premultiplied(rgb, channels[alpha])
-            for k, c in enumerate("RGB"):
-                out[f"{prefix}{c}"] = lin[..., k]
-    return out
-
-
-def write_layers(directory, stem, channels, layers=PREVIEW_LAYERS):
-    """Write ``<stem>.exr`` (every channel, colours in linear light), ``<stem>_<layer>.png`` previews
-    and a contact sheet ``<stem>_sheet.png`` (main, layers, depth). Returns the EXR path."""
+def write_layers(directory, stem, channels, layers=PREVIEW_LAYERS, camera=None, command=None, pngs=True):
+    """Write ``<stem>.exr`` (composited channels, header with the camera and ``command``, by default
+    this process's command line) and, with ``pngs``, ``<stem>_<layer>.png`` previews and a contact
+    sheet ``<stem>_sheet.png`` (main, layers, depth). ``channels``: the integrator's raw channels.
+    Returns the EXR path."""
     os.makedirs(directory, exist_ok=True)
     exr = os.path.join(directory, f"{stem}.exr")
-    write_exr(exr, linear_channels(channels))
-    images = previews(channels, [lay for lay in layers if f"{lay}.R" in channels])
-    for name, image in images.items():
-        write_png(os.path.join(directory, f"{stem}_{name}.png"), image)
-    write_png(os.path.join(directory, f"{stem}_sheet.png"), contact_sheet(list(images.values())))
+    linear = composite_channels(channels)
+    write_exr(exr, linear, exr_header(camera, command or shlex.join([os.path.basename(sys.executable)] + sys.argv)))
+    if pngs:
+        images = previews(linear, [lay for lay in layers if f"{lay}.R" in linear])
+        for name, image in images.items():
+            write_png(os.path.join(directory, f"{stem}_{name}.png"), image)
+        write_png(os.path.join(directory, f"{stem}_sheet.png"), contact_sheet(list(images.values())))
     return exr
 
 
@@ -76,4 +72,6 @@ def render_scene_files(scene, directory, spp=None, size=None, cameras=None, pref
             params = mi.traverse(sensor)
             params["film.size"] = mi.ScalarVector2u(*size)
             params.update()
-    return [write_layers(directory, name, render_channels(scene, sensor, spp)) for name, sensor in sensors]
+    cams = dict(cameras) if cameras is not None else {}
+    return [write_layers(directory, name, render_channels(scene, sensor, spp), camera=cams.get(name))
+            for name, sensor in sensors]

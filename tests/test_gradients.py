@@ -62,6 +62,8 @@ def test_mitsuba_render_gradients():
     for k, name in enumerate(scene.integrator().aov_names()):
         if name.endswith("Z"):  # depth = sum w t / sum w: smooth only where the layer is opaque enough
             w[..., 3 + k] *= 0.05 if name in ("full.Z", "bg.Z") else 0.0
+        if name == "fg.coverage":  # the matte is an output for compositing, not differentiated
+            w[..., 3 + k] = 0.0
     weights = mi.TensorXf(w)
 
     def loss():

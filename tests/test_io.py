@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from helpers import box_transform, integrator, ortho_scene, random_field
 
-from mi_voldis.export import linear_channels, render_channels, write_layers
 from mi_voldis.io.exr import read_exr, write_exr
 from mi_voldis.io.scene_xml import save_field, sensor_xml, write_scene
 from mi_voldis.io.vol import read_header, read_vol, write_vol
@@ -53,26 +52,6 @@ def test_exr_round_trip(tmp_path):
     assert set(back) == set(channels)
     for name, value in channels.items():
         np.testing.assert_array_equal(back[name], value)
-
-
-def test_rendered_layers_round_trip_through_exr(tmp_path):
-    spec = {"type": "voldis", "samples": 16, "full": random_field(3), "bg": random_field(4)}
-    channels = render_channels(ortho_scene(spec))
-    exr = write_layers(str(tmp_path), "view", channels)
-    back = read_exr(exr)
-    expected = {"R", "G", "B", "A", "depth.Z"} | {f"{lay}.{c}" for lay in ("full", "bg", "fg") for c in "RGBAZ"}
-    assert set(back) == expected
-    linear = linear_channels(channels)
-    for name in expected:
-        np.testing.assert_array_equal(back[name], linear[name])
-    # colours go to linear light (sRGB decoded on the unpremultiplied colour); alpha and depth unchanged
-    a = channels["full.A"]
-    c = channels["full.R"] / np.where(np.abs(a) > 1e-4, a, 1)
-    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4) * a
-    np.testing.assert_allclose(back["full.R"][np.abs(a) > 1e-4], lin[np.abs(a) > 1e-4], rtol=1e-5, atol=1e-6)
-    np.testing.assert_array_equal(back["full.Z"], channels["full.Z"])
-    for layer in ("composite", "full", "bg", "fg", "depth", "sheet"):
-        assert os.path.isfile(tmp_path / f"view_{layer}.png")
 
 
 def scene_files(tmp_path):

@@ -4,6 +4,7 @@ import os
 
 import numpy as np
 
+from ..compositing import composite_channels
 from ..export import previews
 from ..io.images import write_png
 from ..metrics import dilate, iou, psnr, ssim
@@ -37,5 +38,5 @@ def evaluate(ds, integrator, hull_dilation):
 def write_previews(out, renders, views):
     os.makedirs(out, exist_ok=True)
     for v in views:
-        for name, image in previews(layer_channels(renders[v]), ("full", "bg", "fg")).items():
+        for name, image in previews(composite_channels(layer_channels(renders[v])), ("full", "bg", "fg")).items():
             write_png(os.path.join(out, f"view{v:03d}_{name}.png"), image)

@@ -9,8 +9,9 @@ import numpy as np
 import OpenEXR
 
 
-def write_exr(path, channels):
-    """Write ``{name: (H, W) float array}`` as a ZIP-compressed float32 scanline EXR.
+def write_exr(path, channels, header=None):
+    """Write ``{name: (H, W) float array}`` as a ZIP-compressed float32 scanline EXR, with the extra
+    ``header`` attributes (name -> str, float tuple or 4x4 float32 matrix).
 
     Written to a temporary file and renamed, so an existing file is never left half-written."""
     if not channels:
@@ -19,11 +20,20 @@ def write_exr(path, channels):
     if len(shapes) != 1 or len(next(iter(shapes))) != 2:
         raise ValueError(f"{path}: all channels must be 2D arrays of one size, got {sorted(shapes)}")
     data = {name: np.ascontiguousarray(value, dtype=np.float32) for name, value in channels.items()}
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    header = {**(header or {}), "compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     tmp = f"{path}.tmp.exr"
     with OpenEXR.File(header, data) as f:
         f.write(tmp)
     os.replace(tmp, path)
+
+
+def read_exr_header(path):
+    """The header attributes of an EXR file."""
+    try:
+        with OpenEXR.File(str(path)) as f:
+            return dict(f.header())
+    except Exception as e:
+        raise ValueError(f"{path}: cannot read EXR file ({e})") from None
 
 
 def read_exr(path):

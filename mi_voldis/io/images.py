@@ -3,7 +3,7 @@
 Radiance fields here hold *display-encoded* (sRGB) colour, as the photographs they are fitted to and
 as NeRF does: their renders are quantised to PNG as they are (:func:`display_to_uint8`). Mitsuba's
 path tracer renders *linear* light, encoded with the sRGB curve for PNG (:func:`linear_to_uint8`).
-EXR layers are written in linear light (:func:`display_to_linear_premultiplied`), as compositing
+EXR layers are written in linear light (:mod:`mi_voldis.compositing`), as compositing
 tools expect."""
 import os
 
@@ -30,16 +30,6 @@ def linear_to_uint8(rgb):
 def display_to_uint8(rgb):
     """(H, W, 3) display-encoded RGB in [0, 1] -> uint8 (no transfer curve)."""
     return np.round(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8)
-
-
-def display_to_linear_premultiplied(rgb, alpha, eps=1e-4):
-    """Premultiplied display-encoded colour -> premultiplied linear colour: the sRGB curve is undone on
-    the unpremultiplied colour c = rgb / alpha (sign-symmetric, as foreground layers can be negative);
-    0 where |alpha| < eps."""
-    alpha = np.asarray(alpha, np.float64)[..., None]
-    ok = np.abs(alpha) > eps
-    c = np.where(ok, np.asarray(rgb, np.float64) / np.where(ok, alpha, 1.0), 0.0)
-    return (np.sign(c) * srgb_to_linear(np.abs(c)) * alpha).astype(np.float32)
 
 
 def depth_to_uint8(z, alpha=None):

@@ -206,10 +206,12 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
                 f"samples={self.samples}, step_size={self.step_size}, fields={list(self.fields)}]")
 
     def aov_names(self):
+        """A, depth.Z, each layer's R, G, B, A, Z, then ``fg.coverage`` = sum_i max(w_fg,i, 0), the
+        object's matte (:mod:`mi_voldis.compositing`; not differentiated)."""
         names = ["A", "depth.Z"]
         for layer in self.exr_layers:
             names += [f"{layer}.{c}" for c in "RGBAZ"]
-        return names
+        return names + ["fg.coverage"]
 
     @property
     def exr_layers(self):
@@ -285,6 +287,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             for layer in self.exr_layers:
                 rgb, a, z = out[layer]
                 aovs += [rgb[0], rgb[1], rgb[2], a, z]
+            aovs.append(fwd.stats["fg_coverage"])
             return L, rays.hit, aovs, fwd
         fwd = state_in
         raw = layer_io.finalize_adjoint(layer_io.raw_sums(fwd.plan, fwd.acc), self._layer_grads(δL, δaovs))

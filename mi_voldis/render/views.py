@@ -37,7 +37,9 @@ def render_camera(integrator, camera, layers=("composite", "full", "bg", "fg"), 
 
 
 def layer_channels(layers, main="composite"):
-    """EXR channel dict (``R, G, B, A, depth.Z, <layer>.R/G/B/A/Z``) of rendered layers; the main
+    """Channel dict (``R, G, B, A, depth.Z, <layer>.R/G/B/A/Z``, ``fg.coverage``) of rendered layers,
+    as the integrator's AOVs name them (display-encoded sums; :mod:`mi_voldis.compositing` turns them
+    into the layers written to EXR); the main
     image is layer ``main`` plus the residual layer when there is one (as the integrator renders it)."""
     rgb, a, z = layers[main]
     if "res" in layers:
@@ -48,4 +50,6 @@ def layer_channels(layers, main="composite"):
             rgb, a, z = layers[name]
             channels.update({f"{name}.R": rgb[..., 0], f"{name}.G": rgb[..., 1], f"{name}.B": rgb[..., 2],
                              f"{name}.A": a, f"{name}.Z": z})
+    if "fg_coverage" in layers:
+        channels["fg.coverage"] = layers["fg_coverage"]
     return channels

@@ -15,11 +15,9 @@ import numpy as np
 
 from ..data import DatasetError, load_dataset
 from ..device import from_numpy
-from ..export import linear_channels, previews
+from ..export import write_layers
 from ..field_state import density_raw_for_alpha, shape_for
 from ..fieldspec import box_transform, field_dict
-from ..io.exr import write_exr
-from ..io.images import contact_sheet, write_png
 from ..io.run_folder import Checkpoint, peak_rss_mib, write_json
 from ..metrics import dilate
 from ..optim.loop import optimize
@@ -173,13 +171,9 @@ class TaskOutput:
         for v in views:
             out = render_camera(integrator, ds.cameras[v], layers)
             renders[v] = out
-            channels = layer_channels(out, main)
-            write_exr(os.path.join(self.dir, f"view{v:03d}.exr"), linear_channels(channels))
-            if len(renders) <= PREVIEW_VIEWS:
-                images = previews(channels, [lay for lay in ("full", "bg", "fg", "res") if lay in out])
-                for name, image in images.items():
-                    write_png(os.path.join(self.dir, f"view{v:03d}_{name}.png"), image)
-                write_png(os.path.join(self.dir, f"view{v:03d}_sheet.png"), contact_sheet(list(images.values())))
+            write_layers(self.dir, f"view{v:03d}", layer_channels(out, main),
+                         [lay for lay in ("full", "bg", "fg", "res") if lay in out], camera=ds.cameras[v],
+                         pngs=len(renders) <= PREVIEW_VIEWS)
         return renders
 
     def finish(self, metrics, log=None):

@@ -1,0 +1,105 @@
+"""Layers a compositor can use: linear light, premultiplied, RGB <= A, and an object layer that rebuilds
+the scene over the background.
+
+The integrator's layers are sums over a ray's samples of display-encoded colour (the fields hold sRGB
+values, as the photographs do). For EXR they become premultiplied *linear* light: the sRGB curve is
+undone on the unpremultiplied colour, alpha is clipped to [0, 1] and colour to [0, A].
+
+The paper's foreground (w_fg = w_full - w_bg, c_fg = c_full - c_bg) is signed: its alpha is negative
+where the background lies in front of what the full field shows, and its colour over a tiny alpha
+explodes once the sRGB curve is undone. The ``fg`` layer written here is instead defined by the one
+identity a compositor relies on (Porter-Duff "over", premultiplied, linear light):
+
+    full = fg + (1 - fg.A) bg,
+
+with fg.A = min(1, sum_i max(w_fg,i, 0)) the object's matte (how much of the ray the object covers,
+``fg.coverage`` from the integrator) and fg.RGB = full - (1 - fg.A) bg, clipped to [0, fg.A]. Where the
+two fields agree the clip does nothing and the identity holds to rounding; where they disagree
+without the object (fitting noise), the clip makes the layer empty rather than a smear of signed
+colour. fg.Z is the full field's depth where the matte is non-zero (there the object is the first
+surface), 0 elsewhere.
+
+Depth channels (``depth.Z``, ``<layer>.Z``) are distances along the camera ray from its origin, in
+world units, 0 where the layer is empty.
+"""
+import numpy as np
+
+from .io.images import srgb_to_linear
+
+LAYERS = ("full", "bg", "fg", "res")
+
+
+def linear_layer(rgb, alpha):
+    """Premultiplied display-encoded sums -> premultiplied linear RGB with 0 <= RGB <= A, and A
+    clipped to [0, 1]; 0 where A is negligible (below 1e-4)."""
+    a = np.clip(np.asarray(alpha, np.float64), 0.0, 1.0)[..., None]
+    ok = a > 1e-4
+    c = np.where(ok, np.asarray(rgb, np.float64) / np.where(ok, a, 1.0), 0.0)
+    lin = srgb_to_linear(np.clip(c, 0.0, 1.0)) * a
+    return lin.astype(np.float32), a[..., 0].astype(np.float32)
+
+
+def _rgb(channels, prefix):
+    return np.stack([channels[f"{prefix}{c}"] for c in "RGB"], axis=-1)
+
+
+def composite_channels(channels):
+    """EXR channels for compositing from the integrator's raw channels (:func:`mi_voldis.render.views.
+    layer_channels`, :func:`mi_voldis.export.render_channels`): R, G, B, A (the main image), depth.Z,
+    and per layer present ``<layer>.R/G/B/A/Z``, all as the module docstring states."""
+    out = {}
+    rgb, a = linear_layer(_rgb(channels, ""), channels["A"])
+    out.update({"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2], "A": a, "depth.Z": channels["depth.Z"]})
+    linear = {}
+    for layer in ("full", "bg", "res"):
+        if f"{layer}.R" in channels:
+            linear[layer] = linear_layer(_rgb(channels, f"{layer}."), channels[f"{layer}.A"])
+            out.update(_layer(layer, *linear[layer], channels[f"{layer}.Z"]))
+    if "fg.coverage" in channels and "full" in linear and "bg" in linear:
+        matte = np.clip(channels["fg.coverage"], 0.0, 1.0).astype(np.float32)
+        full, bg = linear["full"][0], linear["bg"][0]
+        fg = np.clip(full - (1.0 - matte[..., None]) * bg, 0.0, matte[..., None]).astype(np.float32)
+        z = np.where(matte > 0, channels["full.Z"], 0.0).astype(np.float32)
+        out.update(_layer("fg", fg, matte, z))
+    return out
+
+
+def _layer(name, rgb, a, z):
+    return {f"{name}.R": rgb[..., 0], f"{name}.G": rgb[..., 1], f"{name}.B": rgb[..., 2], f"{name}.A": a,
+            f"{name}.Z": np.asarray(z, np.float32)}
+
+
+# linear Rec.709 / sRGB primaries and D65 white (x, y): red, green, blue, white
+REC709_CHROMATICITIES = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290)
+CV_FROM_MI = np.diag([-1.0, 1.0, 1.0, 1.0])  # OpenEXR's camera space: +x right, +y up, +z forward
+
+
+def world_to_camera(camera):
+    """OpenEXR's ``worldToCamera`` of a :class:`~mi_voldis.cameras.Camera` as a column-vector 4x4 matrix
+    (camera space left-handed: +x right, +y up, +z the viewing direction)."""
+    return CV_FROM_MI @ np.linalg.inv(np.asarray(camera.to_world, np.float64))
+
+
+def world_to_ndc(camera):
+    """OpenEXR's ``worldToNDC`` (column-vector form): a world point p maps to (x / w, y / w) in the
+    display window's NDC ((0, 0) its top-left corner, (1, 1) its bottom-right; y down)."""
+    tan_x, tan_y = camera.tan_scale
+    ox, oy = camera.principal
+    proj = np.array([[1 / tan_x, 0, 0.5 - ox, 0], [0, -1 / tan_y, 0.5 - oy, 0], [0, 0, 1, 0], [0, 0, 1, 0]])
+    return proj @ world_to_camera(camera)
+
+
+def exr_header(camera=None, command=None):
+    """Header attributes of a layered EXR: chromaticities, what the depth channels hold, the software,
+    the command, and the camera as Nuke reads it (``worldToCamera``, ``worldToNDC``; OpenEXR stores
+    matrices for row vectors, i.e. transposed)."""
+    from . import __version__
+    header = {"chromaticities": REC709_CHROMATICITIES, "software": f"mi-voldis {__version__}",
+              "comments": "colour: linear Rec.709, premultiplied; depth.Z and <layer>.Z: distance along the "
+                          "camera ray, world units, 0 where empty; fg = the object, full = fg over bg"}
+    if command:
+        header["command"] = command
+    if camera is not None:
+        header["worldToCamera"] = np.ascontiguousarray(world_to_camera(camera).T, np.float32)
+        header["worldToNDC"] = np.ascontiguousarray(world_to_ndc(camera).T, np.float32)  # the binding reads C order
+    return header
