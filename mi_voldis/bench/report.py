@@ -286,8 +286,9 @@ def write_masks(results, report_dir, command):
           f"{results['machine']['cpu']}, {results['machine']['cores']} cores; variant "
           f"`{results['machine']['variant']}`.", "",
           "Per scene, from the removal section's default fit (its full field): two training views get their "
-          "true masks (the first training view and the one whose optical axis is closest to 90 degrees "
-          "from it: `mi_voldis.bench.masks.given_views`), `scripts/make_masks.py` makes masks for every view "
+          "true masks (the first training view and the one that sees the rig's common target from the "
+          "direction closest to 90 degrees from the first's: `mi_voldis.bench.masks.given_views`), "
+          "`scripts/make_masks.py` makes masks for every view "
           "(`python -m mi_voldis.bench.masks RUN OUT`), scored against the exact visible coverage > 0.5 on "
           "every other view; then the background is fitted again from the same full field with those masks "
           "(default `bg_strategy`) and scored like the removal with every true mask (in-mask PSNR on the "
