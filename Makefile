@@ -1,6 +1,7 @@
 # Set-up and entry points. `make demo` and `make test` each do the whole set-up on a fresh machine:
 # a libLLVM >= 16 for Dr.Jit (Debian's libllvm19 when missing), a virtual environment in .venv with
-# the pinned dependencies, then the job itself.
+# the versions pinned in constraints.txt (only what the job needs: no PyTorch for the demo and tests),
+# then the job itself.
 PYTHON ?= python3
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -9,10 +10,10 @@ export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 
 .PHONY: setup demo test bench clean
 
-$(VENV)/.installed: pyproject.toml
+$(VENV)/.installed: pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test,clip]"
+	$(PY) -m pip install --quiet -c constraints.txt -e ".[test]"
 	touch $@
 
 setup: $(VENV)/.installed
@@ -24,6 +25,7 @@ test: setup
 	$(PY) -m pytest -q
 
 bench: setup
+	$(PY) -m pip install --quiet -c constraints.txt -e ".[bench]"
 	$(PY) scripts/bench.py
 
 clean:

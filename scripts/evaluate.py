@@ -1,59 +1,13 @@
 """Score a run's removal against a dataset's ground-truth backgrounds (SPIn-NeRF's protocol).
 
-    python scripts/evaluate.py RUN DATASET [--dilate F] [--out FILE.json]
-    python scripts/evaluate.py RUN DATASET --lpips-weights DIR   (pip install .[lpips])
-
-DATASET: a SPIn-NeRF folder (images_4/label for training views, images_4/test_label for the test
-views photographed without the object) or a transforms.json dataset with background_path ground truth
-(the bundled and random scenes). Prints (and with --out writes) PSNR / SSIM over the whole image,
-inside the dilated mask and inside the mask's bounding box, per view and their means; LPIPS with a
-local weights folder (see mi_voldis/lpips.py for the files it needs).
+Runs voldis_cli/evaluate.py from a checkout; installed, the same program is the command `voldis-evaluate`.
 """
-import argparse
-import json
 import os
 import sys
 
-from _boundary import add_debug, run
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # a checkout without installing
 
-
-def main(argv=None):
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--variant", default="llvm_ad_rgb")
-    os.environ["MI_VOLDIS_VARIANT"] = pre.parse_known_args(argv)[0].variant  # before mi_voldis is imported
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("run", help="run folder written by scripts/train.py")
-    ap.add_argument("dataset", nargs="?", help="dataset with ground truth (default: the run's own)")
-    ap.add_argument("--dilate", type=float, default=0.01, help="mask dilation, fraction of the image diagonal")
-    ap.add_argument("--lpips-weights", help="folder with LPIPS weights (see mi_voldis/lpips.py)")
-    ap.add_argument("--out", help="also write the scores to this JSON file")
-    ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
-    ap.add_argument("--quiet", action="store_true", help="print only the means")
-    add_debug(ap)
-    args = ap.parse_args(argv)
-    if not 0 <= args.dilate < 0.5:
-        ap.error(f"--dilate must be in [0, 0.5), got {args.dilate}")
-    if not os.path.isdir(args.run):
-        raise ValueError(f"{args.run}: no such run folder (scripts/train.py writes one)")
-    from mi_voldis.evaluate import evaluate_removal
-    from mi_voldis.tasks.base import FittedRun
-    fitted = FittedRun(args.run, args.dataset)
-    perceptual = None
-    if args.lpips_weights:
-        from mi_voldis.lpips import load_lpips
-        perceptual = load_lpips(args.lpips_weights)
-    ds = fitted.dataset
-    scores = evaluate_removal(fitted.integrator(), ds, args.dilate, perceptual)
-    if not scores["views"]:
-        raise ValueError(f"{ds.root}: no test view has a ground-truth background and an object mask "
-                         "(SPIn-NeRF's images_K/test_label/ or transforms.json background_path)")
-    scores = {"run": args.run, "dataset": ds.root, **scores}
-    if args.out:
-        from mi_voldis.io.run_folder import write_json
-        write_json(args.out, scores)
-    print(json.dumps({k: v for k, v in scores.items() if k != "per_view" or not args.quiet}, indent=1))
-
+from voldis_cli.evaluate import entry, main  # noqa: E402, F401  (main: for tests that call the script)
 
 if __name__ == "__main__":
-    sys.exit(run(main))
+    entry()

@@ -1,7 +1,7 @@
 """Bad input through the scripts, as a user gives it: one line naming the file (or flag) and the problem,
 exit code 1 (2 for usage), no traceback, and every output folder that existed before byte-identical after.
 
-Cases run the scripts' ``main`` in this process through their boundary (``scripts/_boundary.py``), as
+Cases run the scripts' ``main`` in this process through their boundary (``voldis_cli/boundary.py``), as
 ``python scripts/X.py`` does, so that 50 cases cost seconds; two run as real processes as well."""
 import hashlib
 import importlib.util
@@ -15,8 +15,7 @@ import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCRIPTS = os.path.join(ROOT, "scripts")
-sys.path.insert(0, SCRIPTS)
-import _boundary  # noqa: E402
+from voldis_cli import boundary as _boundary  # noqa: E402
 
 
 def script(name):

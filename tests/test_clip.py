@@ -6,7 +6,7 @@ import string
 
 import pytest
 
-torch = pytest.importorskip("torch")
+torch = pytest.importorskip("torch", reason="needs PyTorch: pip install .[clip] or .[bench]")
 transformers = pytest.importorskip("transformers")
 
 import drjit as dr  # noqa: E402

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-torch = pytest.importorskip("torch")
+torch = pytest.importorskip("torch", reason="needs PyTorch: pip install .[clip] or .[bench]")
 
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402

@@ -16,7 +16,8 @@ import time
 
 import drjit as dr
 import numpy as np
-from tqdm import tqdm
+
+from ..progress import Progress
 
 
 def _flat(array):
@@ -38,9 +39,7 @@ def optimize(problem, adam, *, steps, start=0, final_ratio=0.1, log=None, desc="
     log = [] if log is None else log
     elapsed = log[-1]["time"] if log else 0.0
     end = steps if callable(steps) else (lambda: steps)
-    # progress bars on terminals only (None: tqdm disables itself when stderr is not a TTY)
-    bar = tqdm(total=end() - start, desc=desc, disable=None if progress else True, dynamic_ncols=True, leave=False,
-               mininterval=0.5)
+    bar = Progress(end() - start, desc, progress)  # a bar on a terminal, lines in a log
     step = start - 1
     while step + 1 < end():
         step += 1

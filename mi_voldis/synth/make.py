@@ -19,12 +19,12 @@ import shutil
 import drjit as dr
 import mitsuba as mi
 import numpy as np
-from tqdm import tqdm
 
 from ..data.conventions import mitsuba_to_opengl
 from ..data.llff import write_llff
 from ..io.images import linear_to_uint8, write_png
 from ..io.run_folder import staged
+from ..progress import progress_iter
 from ..transforms import compose, to_scalar_transform
 from . import rigs, variants
 
@@ -194,8 +194,7 @@ def _render_views(folder, scene_path, scenes, cameras, split, width, height, spp
     for p, kind in enumerate(PASSES):
         renderer = _Renderer(scenes[kind], width, height, spp)
         todo = [k for k in range(views) if kind != "moved" or split[k] == "test"]
-        for k in tqdm(todo, desc=f"{os.path.basename(scene_path)}: {kind}", disable=None if progress else True,
-                      leave=False, mininterval=0.5):
+        for k in progress_iter(todo, f"{os.path.basename(scene_path)}: {kind}", progress):
             img = renderer.render(cameras[k], seed * 1_000_003 + p * views + k)
             if kind == "coverage":
                 cov = np.round(np.clip(img.mean(axis=2), 0.0, 1.0) * 65535).astype(np.uint16)

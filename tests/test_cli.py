@@ -1,0 +1,43 @@
+"""The command-line programs: every one takes --quiet, the installed commands point at them, and a
+long job's progress reaches a log as lines when stderr is not a terminal."""
+import io
+import os
+import tomllib
+
+import pytest
+
+from mi_voldis import progress
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PROGRAMS = ("train", "optimize", "render", "make_dataset", "make_masks", "evaluate", "export_vol", "bench", "demo")
+
+
+@pytest.mark.parametrize("name", PROGRAMS)
+def test_every_program_takes_quiet_and_is_installed(name, capsys):
+    import importlib
+    module = importlib.import_module(f"voldis_cli.{name}")
+    with pytest.raises(SystemExit) as exit_:
+        module.main(["--help"])
+    assert exit_.value.code == 0 and "--quiet" in capsys.readouterr().out
+    with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
+        scripts = tomllib.load(f)["project"]["scripts"]
+    assert f"voldis_cli.{name}:entry" in scripts.values()
+    assert os.path.isfile(os.path.join(ROOT, "scripts", f"{name}.py"))
+
+
+def test_progress_is_lines_in_a_log(monkeypatch):
+    log = io.StringIO()  # not a terminal
+    monkeypatch.setattr(progress, "LOG_SECONDS", 0.0)
+    p = progress.Progress(4, "fit", stream=log)
+    for k in range(4):
+        p.set_postfix({"loss": f"{0.5 / (k + 1):.3g}"})
+        p.update(1)
+    p.close()
+    lines = log.getvalue().splitlines()
+    assert lines[0].startswith("fit: 1/4 (25%)") and "loss=0.5" in lines[0]
+    assert lines[-1].startswith("fit: 4/4 (100%)") and "\r" not in log.getvalue()
+    quiet = io.StringIO()
+    q = progress.Progress(4, "fit", enabled=False, stream=quiet)
+    q.update(4)
+    q.close()
+    assert quiet.getvalue() == ""

@@ -1,0 +1,73 @@
+"""Speed against error, side by side, in one command.
+
+    python scripts/bench.py [--quick] [--work out/bench] [--report reports]
+    python scripts/bench.py --removal [--work out/bench] [--report reports] [--scenes ...]
+    python scripts/bench.py --masks [--work out/bench] [--report reports] [--scenes ...]
+    python scripts/bench.py --step-profile [--rays random|tiles]   (a training step by kernel, record on and off)
+
+Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
+PNG plots. --quick is a smoke run of a few minutes; the full run fits every bundled scene, capture and
+random seed with the default budgets (hours on 2 cores); --scenes picks some. --removal writes
+reports/removal.md instead: every background strategy on the bundled and random ground-truth scenes;
+--masks writes reports/masks.md: masks from two views (scripts/make_masks.py) and removal with them.
+"""
+import argparse
+import os
+import sys
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="small configurations only (a few minutes)")
+    ap.add_argument("--work", default="out/bench", help="datasets, runs and logs")
+    ap.add_argument("--report", default="reports", help="where bench.md and the plots go")
+    ap.add_argument("--step-profile", action="store_true",
+                    help="only profile one training step (128^3, 128 samples/ray, 16k rays) by kernel")
+    ap.add_argument("--rays", default="random", choices=("random", "tiles"),
+                    help="--step-profile: random rays or fitting's tiled batches")
+    ap.add_argument("--scenes", help="comma-separated scenes whose fits and tasks run (default: all); finished "
+                                     "runs in --work with the same settings are reused")
+    ap.add_argument("--removal", action="store_true",
+                    help="only the removal section: background strategies on the ground-truth scenes")
+    ap.add_argument("--masks", action="store_true",
+                    help="only the masks section: masks from two views, and removal with them")
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--quiet", action="store_true", help="print nothing but errors (the children run quietly anyway)")
+    args = ap.parse_args(argv)
+    os.environ["MI_VOLDIS_VARIANT"] = args.variant
+    if args.step_profile:
+        import json
+
+        from mi_voldis.bench.throughput import step_profile
+        # the record (adjoint replays the primal's lookup values) against reading the grid again
+        print(json.dumps({"record": step_profile(rays=args.rays),
+                          "no_record": step_profile(rays=args.rays, record=False)}, indent=1))
+        return
+    from mi_voldis.bench import report
+    from mi_voldis.bench.run import run_all, run_masks, run_removal
+    scenes = args.scenes.split(",") if args.scenes else None
+    if args.removal:
+        results = run_removal(os.path.abspath(args.work), args.report, scenes)
+        command = "python scripts/bench.py --removal" + (f" --scenes {args.scenes}" if args.scenes else "")
+        path = report.write_removal(results, args.report, command)
+        if not args.quiet:
+            print(path)
+        return
+    if args.masks:
+        results = run_masks(os.path.abspath(args.work), args.report, scenes)
+        command = "python scripts/bench.py --masks" + (f" --scenes {args.scenes}" if args.scenes else "")
+        path = report.write_masks(results, args.report, command)
+        if not args.quiet:
+            print(path)
+        return
+    results = run_all(args.quick, os.path.abspath(args.work), args.report, scenes)
+    command = "python scripts/bench.py" + (" --quick" if args.quick else "") + \
+        (f" --scenes {args.scenes}" if args.scenes else "")
+    report.write(results, args.report, command)
+    if not args.quiet:
+        print(os.path.join(args.report, "bench.md"))
+
+
+def entry():
+    """The console command (``[project.scripts]`` in pyproject.toml)."""
+    sys.exit(main())

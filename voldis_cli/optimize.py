@@ -1,0 +1,97 @@
+"""Run a manipulation task on a fitted run.
+
+    python scripts/optimize.py --task {removal,transform,camouflage,nonneg,semantic} RUN [--set name=value ...]
+
+transform: --scale S --rotate AXIS:DEG --translate X,Y,Z [--pivot X,Y,Z] [--composition RULE]
+           (or --dataset-transform: the dataset's own moved_transform, to compare with its ground truth)
+semantic:  --prompt TEXT --clip-model PATH (a local Hugging Face CLIP folder; pip install .[clip])
+Every task setting (listed below, defined in mi_voldis/tasks/settings.py) can be given with --set or
+--config FILE. Writes RUN/<task>/ (volumes, scene.xml, config.json, EXR layers, previews, metrics.json,
+loss.png).
+"""
+import argparse
+import json
+import os
+import sys
+
+from .boundary import add_debug, run
+
+# shorthand flags: flag -> (setting, how to read its text)
+FLAGS = {"steps": ("steps", int), "checkpoint_every": ("checkpoint_every", int), "seed": ("seed", int),
+         "composition": ("composition", str), "scale": ("scale", float), "rotate": ("rotate", str),
+         "translate": ("translate", "vector"), "pivot": ("pivot", "vector"), "prompt": ("prompt", str),
+         "clip_model": ("clip_model", str)}
+
+
+def vector(text, flag):
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3:
+        raise ValueError(f"--{flag.replace('_', '-')} expects X,Y,Z, got '{text}'")
+    return values
+
+
+def main(argv=None):
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--variant", default="llvm_ad_rgb")
+    os.environ["MI_VOLDIS_VARIANT"] = pre.parse_known_args(argv)[0].variant  # before mi_voldis is imported
+    from mi_voldis.tasks.settings import SETTINGS
+    epilog = "\n\n".join(cls.help_text(f"{task} settings") for task, cls in SETTINGS.items())
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=epilog,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("run", help="run directory written by scripts/train.py")
+    ap.add_argument("--task", required=True, choices=tuple(SETTINGS))
+    ap.add_argument("--dataset", help="dataset folder (default: the one the run was fitted on)")
+    ap.add_argument("--config", help="JSON file of task settings (a finished RUN/<task>/config.json works too)")
+    ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one setting")
+    ap.add_argument("--resume", action="store_true", help="continue RUN/<task>.partial from its checkpoint")
+    ap.add_argument("--steps", help="optimisation steps (optimised tasks)")
+    ap.add_argument("--checkpoint-every", help="steps between checkpoints")
+    ap.add_argument("--seed", help="random seed")
+    ap.add_argument("--composition", help="paper, c2, c3, c4 or density")
+    ap.add_argument("--scale", help="transform: scale about the pivot")
+    ap.add_argument("--rotate", help="transform: AXIS:DEG, e.g. y:30")
+    ap.add_argument("--translate", help="transform: X,Y,Z in world units")
+    ap.add_argument("--pivot", help="transform: X,Y,Z (default: the foreground's centre)")
+    ap.add_argument("--dataset-transform", action="store_true", help="transform: use the dataset's moved_transform")
+    ap.add_argument("--prompt", help="semantic: the text to steer the foreground's colours towards")
+    ap.add_argument("--clip-model", help="semantic: local CLIP model folder")
+    ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_debug(ap)
+    args = ap.parse_args(argv)
+    if not os.path.isdir(args.run):
+        raise ValueError(f"{args.run}: no such run folder (scripts/train.py writes one)")
+    values = {}
+    for flag, (name, kind) in FLAGS.items():
+        text = getattr(args, flag)
+        if text is None:
+            continue
+        if kind == "vector":
+            values[name] = vector(text, flag)
+            continue
+        try:
+            values[name] = kind(text)
+        except ValueError:
+            raise ValueError(f"--{flag.replace('_', '-')} expects a {kind.__name__}, got '{text}'") from None
+    if args.resume:
+        values["resume"] = True
+    if args.dataset_transform:
+        values["use_dataset_transform"] = True
+    cls = SETTINGS[args.task]
+    unknown = sorted(set(values) - set(cls.names()))
+    if unknown:
+        ap.error(f"--task {args.task} takes no {', '.join('--' + u.replace('_', '-') for u in unknown)}")
+    settings = cls.from_sources(args.config, args.set, **values)
+    from mi_voldis.tasks import run_task
+    out = run_task(args.run, args.task, settings, args.dataset, progress=not args.quiet)
+    with open(os.path.join(out, "metrics.json")) as f:
+        metrics = json.load(f)
+    print(json.dumps({"output": out, **{k: v for k, v in metrics.items() if k != "per_view"}}, indent=1))
+
+
+def entry():
+    """The console command (``[project.scripts]`` in pyproject.toml)."""
+    sys.exit(run(main))
