@@ -10,6 +10,8 @@ variant is already set, and registers the plugins for the active variant:
 * ``radiance_field`` (medium): a voxel-grid radiance field, see :mod:`mi_voldis.plugins.radiance_field`;
 * ``voldis`` (integrator): aligned-sample mixing of the fields, see :mod:`mi_voldis.plugins.voldis`.
 
+:func:`load_run` opens a fitted run folder for rendering and editing from Python (:mod:`mi_voldis.api`).
+
 Switch variants with :func:`set_variant` (e.g. ``mi_voldis.set_variant("cuda_ad_rgb")``), which also
 re-registers the plugins.
 """
@@ -57,3 +59,9 @@ if mi.variant() is None:
 else:
     check_variant(mi.variant())
     _register_plugins()
+
+
+def load_run(path, dataset=None):
+    """A fitted run for rendering and editing from Python (:mod:`mi_voldis.api`)."""
+    from .api import load_run as load
+    return load(path, dataset)

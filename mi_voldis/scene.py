@@ -26,13 +26,18 @@ def build_integrator(fields, properties):
     return mi.load_dict({"type": "voldis", **properties, **fields}, optimize=False)
 
 
-def write_scene(folder, fields, properties, cameras=(), name="scene.xml"):
+def write_scene(folder, fields, properties, cameras=(), name="scene.xml", shared=None, final=None):
     """Write ``fields`` (role -> a field state or a loaded ``radiance_field``) as ``<role>_grid.npz`` (brick
     grids) or ``<role>_density.vol`` / ``<role>_color.vol`` (dense grids) and ``folder/name``: a scene with
     these fields, the integrator ``properties`` and one sensor per camera
-    (:class:`mi_voldis.cameras.Camera`). Returns the scene file's path."""
+    (:class:`mi_voldis.cameras.Camera`). ``shared``: role -> the scene file whose field of that role
+    this scene refers to instead of writing it again (by a path relative to ``final``, the folder
+    this one becomes, default ``folder``). Returns the scene file's path."""
     bodies, written = {}, {}
-    for role, f in fields.items():  # a field that is another role's (a background without masks) is written once
+    for role, source in (shared or {}).items():
+        bodies[role] = shared_body(source, role, final or folder)
+    for role, f in ((r, f) for r, f in fields.items() if r not in bodies):
+        # a field that is another role's (a background without masks) is written once
         data = getattr(f, "data", None)
         key = id(data) if data is not None else id(f)
         if key not in written:
@@ -42,6 +47,22 @@ def write_scene(folder, fields, properties, cameras=(), name="scene.xml"):
     path = os.path.join(folder, name)
     write_scene_xml(path, bodies, properties, sensors)
     return path
+
+
+def shared_body(scene_file, role, folder):
+    """The ``<medium>`` body of ``role`` in ``scene_file`` with its field files named relative to ``folder``."""
+    import xml.etree.ElementTree as ET
+    try:
+        medium = ET.parse(scene_file).getroot().find(f".//medium[@name='{role}']")
+    except (OSError, ET.ParseError) as e:
+        raise ValueError(f"{scene_file}: cannot read the scene ({e})") from None
+    if medium is None:
+        raise ValueError(f"{scene_file}: no field '{role}' to refer to")
+    for s in medium.findall("string"):
+        if s.get("name") in ("grid", "density", "color"):
+            path = os.path.join(os.path.dirname(os.path.abspath(scene_file)), s.get("value"))
+            s.set("value", os.path.relpath(path, os.path.abspath(folder)))
+    return "".join(ET.tostring(child, encoding="unicode") for child in medium)
 
 
 def save_any_field(folder, role, field):

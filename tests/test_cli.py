@@ -2,7 +2,6 @@
 long job's progress reaches a log as lines when stderr is not a terminal."""
 import io
 import os
-import tomllib
 
 import pytest
 
@@ -19,9 +18,8 @@ def test_every_program_takes_quiet_and_is_installed(name, capsys):
     with pytest.raises(SystemExit) as exit_:
         module.main(["--help"])
     assert exit_.value.code == 0 and "--quiet" in capsys.readouterr().out
-    with open(os.path.join(ROOT, "pyproject.toml"), "rb") as f:
-        scripts = tomllib.load(f)["project"]["scripts"]
-    assert f"voldis_cli.{name}:entry" in scripts.values()
+    with open(os.path.join(ROOT, "pyproject.toml")) as f:
+        assert f'"voldis_cli.{name}:entry"' in f.read().split("[project.scripts]")[1]
     assert os.path.isfile(os.path.join(ROOT, "scripts", f"{name}.py"))
 
 

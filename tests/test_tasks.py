@@ -44,6 +44,26 @@ def test_removal_is_the_background(tiny_run):
     assert os.path.isfile(os.path.join(out, f"view{run.dataset.test[0]:03d}.exr"))
 
 
+def test_task_refers_to_the_run_and_writes_where_told(tiny_run, tmp_path):
+    """--out elsewhere: the task's scene renders as the run's fields do, without a copy of them (its
+    files name the run's by relative path), and no checkpoint is left unless asked for."""
+    out = run_task(tiny_run, "camouflage", {"steps": 4, "checkpoint_every": 2}, progress=False,
+                   out=str(tmp_path / "edits" / "camo"))
+    files = os.listdir(out)
+    assert not any(f.startswith(("full_", "bg_")) for f in files) and "checkpoints" not in files
+    assert any(f.startswith("fg_color") for f in files)  # what the task changed is here
+    text = open(os.path.join(out, "scene.xml")).read()
+    assert os.path.relpath(os.path.join(tiny_run, "full_grid.npz"), out) in text
+    run = FittedRun(tiny_run)
+    cam = run.dataset.cameras[run.dataset.test[0]]
+    scene = mi.load_file(os.path.join(out, "scene.xml"))
+    np.testing.assert_allclose(render_camera(scene.integrator(), cam, ("full",))["full"][0],
+                               render_camera(run.integrator(), cam, ("full",))["full"][0], atol=1e-6)
+    kept = run_task(tiny_run, "camouflage", {"steps": 4, "checkpoint_every": 2}, progress=False,
+                    out=str(tmp_path / "kept"), keep_checkpoints=True)
+    assert os.path.isfile(os.path.join(kept, "checkpoints", "last.npz"))
+
+
 def test_identity_transform_equals_the_original(tiny_run):
     out = run_task(tiny_run, "transform", {"scale": 1.0, "rotate": "y:0", "translate": [0, 0, 0],
                                            "composition": "c4"}, progress=False)
@@ -178,3 +198,17 @@ def test_task_settings_from_the_command_line(tiny_run, tmp_path):
         assert f"{task} settings" in text
         for name in cls.names():
             assert f"  {name} = " in text, (task, name)
+
+
+def test_readme_api_example_runs(tiny_run, tmp_path, capsys):
+    """The README's Python example, on the tiny run (its path swapped in; the edit written to tmp)."""
+    import re
+    readme = open(os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "README.md")).read()
+    code = re.search(r"<!-- api-example -->\n```python\n(.*?)```", readme, re.S).group(1)
+    assert len(code.strip().splitlines()) <= 5
+    code = code.replace('"out/demo/run/tabletop"', repr(tiny_run))
+    moved = str(tmp_path / "moved")
+    code = code.replace('run.edit("transform", {', f'run.edit("transform", out={moved!r}, settings={{')
+    exec(compile(code, "README.md", "exec"), {})
+    shape, task = capsys.readouterr().out.split(") ")
+    assert task.strip() == "transform" and shape.startswith("(24, 32, 4")

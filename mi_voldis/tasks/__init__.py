@@ -27,12 +27,13 @@ def task_settings(task, settings=None):
     return cls.from_sources(**dict(settings or {}))
 
 
-def run_task(run_dir, task, settings=None, dataset=None, progress=True):
+def run_task(run_dir, task, settings=None, dataset=None, progress=True, out=None, keep_checkpoints=False):
     """Run ``task`` with ``settings`` (its settings class, or a dict of values) on the fitted run in
-    ``run_dir``; returns the output folder RUN/<task>."""
+    ``run_dir``; returns the output folder (``out``, default RUN/<task>). Its scene refers to the run's
+    unchanged fields in place; its checkpoints are removed when it finishes unless ``keep_checkpoints``."""
     settings = task_settings(task, settings)  # checked before anything is read or written
     run = FittedRun(run_dir, dataset)
-    final = os.path.join(run.dir, task)
-    with staged(final, settings.resume) as stage:
-        TASKS[task](run, TaskOutput(run, task, settings, stage), progress)
+    final = out or os.path.join(run.dir, task)
+    with staged(final, settings.resume, keep_checkpoints) as stage:
+        TASKS[task](run, TaskOutput(run, task, settings, stage, final), progress)
     return final

@@ -150,17 +150,21 @@ class TaskOutput:
     """What a task writes into its staging folder ``stage`` (RUN/<task>.partial, swapped into place as
     RUN/<task> when the task is done; see :func:`mi_voldis.tasks.run_task`)."""
 
-    def __init__(self, run, task, settings, stage):
+    def __init__(self, run, task, settings, stage, final=None):
         self.run, self.task, self.settings, self.dir = run, task, settings, stage
+        self.final = final or stage  # the folder the stage becomes
         write_json(os.path.join(self.dir, "config.json"), {**settings.to_dict(), "task": task})
         self.checkpoint = Checkpoint(os.path.join(self.dir, "checkpoints", "last.npz"))
 
     def write_scene(self, fields, **properties):
-        """The edited scene: ``fields`` as .vol files and scene.xml with the run's integrator
-        properties changed by ``properties``, a sensor per held-out view."""
+        """The edited scene: scene.xml with the run's integrator properties changed by ``properties``
+        and a sensor per held-out view; of ``fields``, those the task changed are written here, the
+        run's own are referred to in the run's folder (by relative path)."""
         ds = self.run.dataset
+        shared = {role: os.path.join(self.run.dir, "scene.xml") for role, f in fields.items()
+                  if self.run.fields.get(role) is f}
         return write_scene(self.dir, fields, {**self.run.properties, **properties},
-                           [ds.cameras[v] for v in ds.test])
+                           [ds.cameras[v] for v in ds.test], shared=shared, final=self.final)
 
     def write_views(self, integrator, views=None, main="composite", extra=()):
         """Layered EXR and PNG previews of held-out views; returns {view: layers}."""

@@ -6,6 +6,8 @@ them; a task writes its effective settings to RUN/<task>/config.json.
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..render.mixing import RULES
 from ..settings import Settings, setting
 
@@ -15,6 +17,21 @@ def _vector_error(value):
             isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)):
         return None
     return "three finite numbers [x, y, z]"
+
+
+def _matrix_error(value):
+    """None for a 4x4 world-space affine matrix (nested lists or an array), else what is wrong."""
+    if value is None:
+        return None
+    try:
+        m = np.asarray(value, np.float64)
+    except (TypeError, ValueError):
+        return "a 4x4 matrix of numbers"
+    if m.shape != (4, 4) or not np.all(np.isfinite(m)):
+        return f"a finite 4x4 matrix (got shape {m.shape})"
+    if not np.allclose(m[3], [0, 0, 0, 1]) or abs(np.linalg.det(m[:3, :3])) < 1e-9:
+        return "an invertible affine matrix (last row 0, 0, 0, 1)"
+    return None
 
 
 def _rotation_error(value):
@@ -67,6 +84,8 @@ class TransformSettings(TaskSettings):
     translate: list = setting([0.0, 0.0, 0.0], "translation [x, y, z] in world units", check=_vector_error)
     pivot: list | None = setting(None, "pivot [x, y, z] in world units (null: the foreground's centre)",
                                  check=_vector_error)
+    matrix: list | None = setting(None, "world-space 4x4 matrix moving the object (instead of scale, rotate, "
+                                        "translate and pivot)", check=_matrix_error)
     use_dataset_transform: bool = setting(False, "move the object by the dataset's own moved_transform (to "
                                                  "compare with its ground truth) instead of the settings above")
     composition: str = setting("paper", "composition rule of the moved object", choices=tuple(RULES))

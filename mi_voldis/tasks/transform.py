@@ -20,6 +20,8 @@ def matrix_from_settings(run, s):
         if run.dataset.moved_transform is None:
             raise ValueError(f"{run.dataset.root}: the dataset has no moved_transform")
         return np.asarray(run.dataset.moved_transform, np.float64)
+    if s.matrix is not None:
+        return np.asarray(s.matrix, np.float64)
     pivot = run.foreground_centre_world() if s.pivot is None else np.asarray(s.pivot, np.float64)
     return compose(s.scale, parse_rotation(s.rotate) if s.rotate else None, s.translate, pivot)
 
