@@ -1,4 +1,9 @@
-"""The whole pipeline on a bundled scene: dataset -> fit -> disentangle -> edits -> EXRs and a contact sheet."""
+"""The whole pipeline on a bundled scene: dataset -> fit -> disentangle -> edits -> EXRs, a labelled
+contact sheet and a turntable of the moved object beside the original.
+
+The object is moved by the dataset's own ``moved_transform``, whose ground truth scores every
+composition rule (:mod:`mi_voldis.tasks.transform`); unless a rule is given, the edit then uses the
+rule that scored best, and the summary says which and by how much."""
 import json
 import os
 import time
@@ -14,10 +19,12 @@ from .synth.make import make_dataset
 from .tasks import run_task
 
 EDITS = (("removal", {}), ("transform", {"use_dataset_transform": True}), ("camouflage", {}), ("nonneg", {}))
+TURNTABLE_FRAMES = 36
 
 
-def run_demo(out, scene, spp=128, progress=True):
-    """Returns a summary dict; everything lands under ``out``."""
+def run_demo(out, scene, spp=128, progress=True, composition=None):
+    """Returns a summary dict; everything lands under ``out``. ``composition``: the rule that moves
+    the object (default: the best against the ground truth)."""
     name = os.path.splitext(os.path.basename(scene))[0]
     data, run = os.path.join(out, "data", name), os.path.join(out, "run", name)
     timings = {}
@@ -31,24 +38,82 @@ def run_demo(out, scene, spp=128, progress=True):
     results = {}
     for task, options in EDITS:
         t = time.perf_counter()
+        if task == "transform" and composition:
+            options = {**options, "composition": composition}
         folder = run_task(run, task, options, progress=progress)
+        results[task] = _metrics(folder)
+        if task == "transform" and not composition:
+            chosen = best_rule(results[task])
+            if chosen and chosen != results[task]["composition"]:
+                folder = run_task(run, task, {**options, "composition": chosen}, progress=progress)
+                results[task] = _metrics(folder)
         timings[task] = time.perf_counter() - t
-        with open(os.path.join(folder, "metrics.json")) as f:
-            results[task] = json.load(f)
     sheet = os.path.join(out, f"{name}_contact_sheet.png")
-    write_png(sheet, contact_sheet(_sheet_images(data, run), columns=4))
-    return {"dataset": data, "run": run, "contact_sheet": sheet, "seconds": timings,
-            "fit": fit["held_out"], "tasks": results}
+    images, labels = _sheet_images(data, run)
+    write_png(sheet, contact_sheet(images, columns=4, labels=labels))
+    t = time.perf_counter()
+    turntable = _turntable(run, out, name)
+    timings["turntable"] = time.perf_counter() - t
+    return {"dataset": data, "run": run, "contact_sheet": sheet, "turntable": turntable, "seconds": timings,
+            "fit": fit["held_out"], "tasks": results, "composition": _rule_note(results["transform"], composition)}
+
+
+def _metrics(folder):
+    with open(os.path.join(folder, "metrics.json")) as f:
+        return json.load(f)
+
+
+def best_rule(transform_metrics):
+    """The composition rule of highest PSNR against the moved ground truth, or None without one."""
+    table = {k: v["psnr"] for k, v in transform_metrics.get("rules_vs_ground_truth", {}).items()
+             if v.get("psnr") is not None}
+    return max(table, key=table.get) if table else None
+
+
+def _rule_note(m, given):
+    table = m.get("rules_vs_ground_truth", {})
+    used = m["composition"]
+    score = table.get(used, {}).get("psnr")
+    how = "as asked" if given else "the best of the rules against the ground truth"
+    scores = ", ".join(f"{k} {v['psnr']:.2f}" for k, v in table.items() if v.get("psnr") is not None)
+    return f"object moved with composition rule '{used}' ({how}; PSNR {score:.2f} dB; all: {scores})" \
+        if score is not None else f"object moved with composition rule '{used}' (no ground truth to compare)"
+
+
+def _turntable(run, out, name):
+    """An orbit of the moved object (left) beside the original scene (right), as a video."""
+    from .api import Edit, load_run
+    from .camera_paths import make_path
+    from .video import write_video
+    fitted = load_run(run)
+    moved = Edit(os.path.join(run, "transform"), fitted.dataset)
+    cams = make_path("orbit", [fitted.dataset.cameras[v] for v in fitted.dataset.train], TURNTABLE_FRAMES)
+    frames = []
+    for cam in cams:
+        a = moved.render(cam, layers=("composite",), linear=False)["composite"]
+        b = fitted.render(cam, layers=("composite",), linear=False)["composite"]
+        frames.append(np.concatenate([_display(a), _display(b)], axis=1))
+    return write_video(os.path.join(out, f"{name}_turntable"), frames, fps=12)
+
+
+def _display(rgba):
+    return (np.clip(rgba[..., :3], 0, 1) * 255 + 0.5).astype(np.uint8)
+
+
+SHEET = (("previews/view{v:03d}_full.png", "full scene"), ("previews/view{v:03d}_bg.png", "background"),
+         ("previews/view{v:03d}_fg.png", "foreground"), ("transform/view{v:03d}_composite.png", "moved"),
+         ("camouflage/view{v:03d}_composite.png", "camouflage"), ("nonneg/view{v:03d}_composite.png", "light only"),
+         ("previews/view{v:03d}_depth.png", "depth"))
 
 
 def _sheet_images(data, run):
-    """First held-out view: photo, fit, background, foreground / moved, camouflage, light-only edit."""
+    """First held-out view, labelled: photo, fit, background, foreground, moved, camouflage,
+    light-only edit, depth."""
     ds = load_dataset(data)
     v = int(ds.test[0])
-    row = [display_to_uint8(ds.images[v])]
-    for path in (f"previews/view{v:03d}_full.png", f"previews/view{v:03d}_bg.png", f"previews/view{v:03d}_fg.png",
-                 f"transform/view{v:03d}_composite.png", f"camouflage/view{v:03d}_composite.png",
-                 f"nonneg/view{v:03d}_composite.png", f"previews/view{v:03d}_depth.png"):
-        p = os.path.join(run, path)
-        row.append(iio.imread(p)[..., :3] if os.path.isfile(p) else np.zeros_like(row[0]))
-    return row
+    images, labels = [display_to_uint8(ds.images[v])], ["photo"]
+    for path, label in SHEET:
+        p = os.path.join(run, path.format(v=v))
+        images.append(iio.imread(p)[..., :3] if os.path.isfile(p) else np.zeros_like(images[0]))
+        labels.append(label)
+    return images, labels

@@ -12,6 +12,8 @@ from .io.exr import write_exr
 from .io.images import contact_sheet, depth_to_uint8, linear_to_uint8, write_png
 
 PREVIEW_LAYERS = ("full", "bg", "fg")
+SHEET_LABELS = {"composite": "image", "full": "full scene", "bg": "background", "fg": "foreground (object)",
+                "res": "light added", "depth": "depth"}
 
 
 def render_channels(scene, sensor=0, spp=None, seed=0):
@@ -56,8 +58,26 @@ def write_layers(directory, stem, channels, layers=PREVIEW_LAYERS, camera=None, 
         images = previews(linear, [lay for lay in layers if f"{lay}.R" in linear])
         for name, image in images.items():
             write_png(os.path.join(directory, f"{stem}_{name}.png"), image)
-        write_png(os.path.join(directory, f"{stem}_sheet.png"), contact_sheet(list(images.values())))
+        write_png(os.path.join(directory, f"{stem}_sheet.png"),
+                  contact_sheet(list(images.values()), labels=[SHEET_LABELS.get(k, k) for k in images]))
     return exr
+
+
+def render_path(scene, directory, cameras, spp=None, layer="composite", fps=24, prefix="frame"):
+    """Render ``cameras`` (a camera path) to ``directory/<prefix>_NNNN.exr`` and the ``layer``'s frames
+    as a video (:func:`mi_voldis.video.write_video`: MP4, or GIF without imageio-ffmpeg). Returns
+    (EXR paths, video path)."""
+    from .video import write_video
+    key = "" if layer == "composite" else f"{layer}."
+    exrs, frames = [], []
+    for k, cam in enumerate(cameras):
+        raw = render_channels(scene, mi.load_dict(cam.sensor_dict(spp or 1)), spp)
+        exrs.append(write_layers(directory, f"{prefix}_{k:04d}", raw, camera=cam, pngs=False))
+        linear = composite_channels(raw)
+        if f"{key}R" not in linear:
+            raise ValueError(f"the scene renders no '{layer}' layer (it has {', '.join(PREVIEW_LAYERS)})")
+        frames.append(linear_to_uint8(np.stack([linear[f"{key}{c}"] for c in "RGB"], axis=-1)))
+    return exrs, write_video(os.path.join(directory, layer), frames, fps)
 
 
 def render_scene_files(scene, directory, spp=None, size=None, cameras=None, prefix="view"):

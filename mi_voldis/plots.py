@@ -1,24 +1,43 @@
 """Plots of optimisation logs (matplotlib, written as PNG)."""
 
+# what each phase's loss is, for the legend (phases are the ``desc`` of :func:`mi_voldis.optim.loop.optimize`)
+PHASE_LOSS = {"bg refit": "background: L2 outside the masks", "full + bg": "full + background (joint)"}
+
 
 def plot_log(path, log, title):
-    """Training loss and PSNR against wall-clock seconds."""
+    """Training loss against wall-clock seconds, one line per phase (each phase optimises its own loss;
+    a dotted line marks where one ends), and, when the log has any, PSNR against seconds beside it."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    t = [r["time"] for r in log]
-    fig, ax = plt.subplots(1, 2, figsize=(10, 3.6))
-    ax[0].semilogy(t, [r["loss"] for r in log], lw=0.8)
+    psnr_keys = (("psnr", "train batch (full)"), ("psnr_bg", "train batch (bg)"), ("test_psnr", "held-out"))
+    has_psnr = any(key in r for r in log for key, _ in psnr_keys)
+    fig, axes = plt.subplots(1, 2 if has_psnr else 1, figsize=(10 if has_psnr else 5.5, 3.6), squeeze=False)
+    ax = axes[0]
+    phases = []
+    for r in log:
+        name = r.get("phase", "")
+        if not phases or phases[-1][0] != name:
+            phases.append((name, []))
+        phases[-1][1].append(r)
+    for k, (name, rows) in enumerate(phases):
+        label = PHASE_LOSS.get(name, f"{name}: L2 on all pixels" if name.startswith("full") else name or "loss")
+        ax[0].semilogy([r["time"] for r in rows], [r["loss"] for r in rows], lw=0.8, label=label)
+        if k:
+            for a in ax:
+                a.axvline(rows[0]["time"], color="grey", ls=":", lw=0.8)
     ax[0].set_xlabel("seconds")
     ax[0].set_ylabel("training loss")
-    for key, label in (("psnr", "train batch (full)"), ("psnr_bg", "train batch (bg)"), ("test_psnr", "held-out")):
-        pts = [(r["time"], r[key]) for r in log if key in r]
-        if pts:
-            ax[1].plot(*zip(*pts), "o-" if key == "test_psnr" else "-", lw=0.8, ms=3, label=label)
-    ax[1].set_xlabel("seconds")
-    ax[1].set_ylabel("PSNR (dB)")
-    if ax[1].get_legend_handles_labels()[0]:
-        ax[1].legend()
+    if len(phases) > 1 or phases and phases[0][0]:
+        ax[0].legend(fontsize=7)
+    if has_psnr:
+        for key, label in psnr_keys:
+            pts = [(r["time"], r[key]) for r in log if key in r]
+            if pts:
+                ax[1].plot(*zip(*pts), "o-" if key == "test_psnr" else "-", lw=0.8, ms=3, label=label)
+        ax[1].set_xlabel("seconds")
+        ax[1].set_ylabel("PSNR (dB)")
+        ax[1].legend(fontsize=7)
     fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

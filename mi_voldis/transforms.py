@@ -67,3 +67,31 @@ def compose(scale=1.0, rotate=None, translate=(0.0, 0.0, 0.0), pivot=(0.0, 0.0, 
     pivot = np.asarray(pivot, dtype=np.float64)
     m[:3, 3] = pivot - m[:3, :3] @ pivot + np.asarray(translate, dtype=np.float64)
     return m
+
+
+def quaternion_to_rotation(q):
+    """3x3 rotation of a quaternion (w, x, y, z), normalised first."""
+    w, x, y, z = np.asarray(q, np.float64) / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def rotation_to_quaternion(r):
+    """Unit quaternion (w, x, y, z) of a 3x3 rotation (Shepperd's method: the largest of w, x, y, z
+    is found first, so that no division is by a small number)."""
+    r = np.asarray(r, np.float64)
+    trace = np.trace(r)
+    i = int(np.argmax([trace, r[0, 0], r[1, 1], r[2, 2]]))
+    if i == 0:
+        w = np.sqrt(1 + trace) / 2
+        q = np.array([w, (r[2, 1] - r[1, 2]) / (4 * w), (r[0, 2] - r[2, 0]) / (4 * w), (r[1, 0] - r[0, 1]) / (4 * w)])
+    else:
+        a = i - 1
+        b, c = (a + 1) % 3, (a + 2) % 3
+        s = np.sqrt(max(0.0, 1 + r[a, a] - r[b, b] - r[c, c])) * 2
+        q = np.zeros(4)
+        q[0], q[1 + a] = (r[c, b] - r[b, c]) / s, s / 4
+        q[1 + b], q[1 + c] = (r[b, a] + r[a, b]) / s, (r[c, a] + r[a, c]) / s
+    return q / np.linalg.norm(q)
+

@@ -18,6 +18,7 @@ from mi_voldis.data.llff import write_llff
 from mi_voldis.io.exr import write_exr
 from mi_voldis.io.images import linear_to_srgb
 from mi_voldis.synth.rigs import look_at
+from mi_voldis.transforms import rotation_to_quaternion
 
 W, H = 48, 36
 
@@ -109,10 +110,7 @@ def colmap_pose(cam):
     """(qvec, tvec) of a Mitsuba camera: world-to-camera in OpenCV axes."""
     c2w = np.asarray(cam.to_world) @ np.diag([-1.0, -1.0, 1.0, 1.0])
     w2c = np.linalg.inv(c2w)
-    r = w2c[:3, :3]
-    qw = np.sqrt(max(0.0, 1 + np.trace(r))) / 2
-    q = np.array([qw, (r[2, 1] - r[1, 2]) / (4 * qw), (r[0, 2] - r[2, 0]) / (4 * qw), (r[1, 0] - r[0, 1]) / (4 * qw)])
-    return q, w2c[:3, 3]
+    return rotation_to_quaternion(w2c[:3, :3]), w2c[:3, 3]
 
 
 def write_colmap(root, cams, names, model="PINHOLE", params=None, binary=True, points=None):

@@ -212,3 +212,19 @@ def test_readme_api_example_runs(tiny_run, tmp_path, capsys):
     exec(compile(code, "README.md", "exec"), {})
     shape, task = capsys.readouterr().out.split(") ")
     assert task.strip() == "transform" and shape.startswith("(24, 32, 4")
+
+
+def test_demo_picks_the_best_rule_and_renders_a_turntable(tiny_run, tmp_path, monkeypatch):
+    from mi_voldis import demo
+    table = {"paper": {"psnr": 17.8}, "c2": {"psnr": 19.4}, "density": {"psnr": 22.3}, "c4": {"psnr": None}}
+    assert demo.best_rule({"rules_vs_ground_truth": table}) == "density"
+    assert demo.best_rule({"rules_vs_ground_truth": {}}) is None
+    note = demo._rule_note({"composition": "density", "rules_vs_ground_truth": table}, None)
+    assert "'density'" in note and "best" in note and "22.30" in note
+    run_task(tiny_run, "transform", {"use_dataset_transform": True, "composition": "density"}, progress=False)
+    monkeypatch.setattr(demo, "TURNTABLE_FRAMES", 3)
+    video = demo._turntable(tiny_run, str(tmp_path), "tiny")
+    assert os.path.getsize(video) > 0 and video.endswith((".mp4", ".gif"))
+    import imageio.v3 as iio
+    frames = iio.imread(video, index=None)
+    assert frames.shape[0] == 3 and frames.shape[2] == 2 * 32  # moved beside the original

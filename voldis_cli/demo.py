@@ -20,12 +20,14 @@ def main(argv=None):
     ap.add_argument("--out", default="out/demo")
     ap.add_argument("--spp", type=int, default=128, help="path-tracing samples per pixel of the dataset")
     ap.add_argument("--variant", default="llvm_ad_rgb")
-    ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--composition", choices=("paper", "c2", "c3", "c4", "density"),
+                    help="composition rule that moves the object (default: the best against the ground truth)")
+    ap.add_argument("--quiet", action="store_true", help="no progress lines")
     args = ap.parse_args(argv)
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
     from mi_voldis.demo import run_demo
     try:
-        summary = run_demo(args.out, os.path.normpath(args.scene), args.spp, not args.quiet)
+        summary = run_demo(args.out, os.path.normpath(args.scene), args.spp, not args.quiet, args.composition)
     except ValueError as e:
         sys.exit(f"error: {e}")
     fit = summary["fit"]
@@ -36,6 +38,8 @@ def main(argv=None):
     for task in summary["tasks"]:
         print(f"{task + ':':15} {os.path.join(summary['run'], task)}  (scene.xml, viewNNN.exr, previews, metrics.json)")
     print(f"contact sheet:  {summary['contact_sheet']}")
+    print(f"turntable:      {summary['turntable']}  (the moved object, left, beside the original)")
+    print(summary["composition"])
 
 
 def entry():

@@ -2,12 +2,16 @@
 
     python scripts/render.py SCENE.xml --out DIR [--spp N] [--width W --height H] [--variant V]
     python scripts/render.py RUN/scene.xml --cameras DATASET --split test --out DIR
+    python scripts/render.py RUN/<task>/scene.xml --path orbit|spiral|interpolate|camera_path.json --frames N --out DIR
 
 With --cameras, the views (split, downscale factor) are those the run was fitted with, read from the
 config.json beside SCENE.xml when there is one.
 
 Writes, per sensor of the scene (or per camera of a dataset split), DIR/<name>.exr (R, G, B, A,
-depth.Z, full.*, bg.*, fg.*; colours in linear light) and PNG previews DIR/<name>_<layer>.png.
+depth.Z, full.*, bg.*, fg.*; colours in linear light, mi_voldis/compositing.py) and PNG previews
+DIR/<name>_<layer>.png. With --path: DIR/frame_NNNN.exr and DIR/<layer>.mp4 (needs imageio-ffmpeg:
+pip install .[video]; without it DIR/<layer>.gif). The path is made from the training views of the
+capture the run was fitted on (or --cameras DATASET).
 """
 import argparse
 import os
@@ -17,14 +21,37 @@ from .boundary import add_debug, positive, run
 
 
 def run_record(folder):
-    """The dataset record of the run folder holding the scene (its config.json), or None."""
+    """The dataset record of the run holding the scene: the config.json beside it, or, for a task's
+    scene (RUN/<task>/scene.xml), the run's one folder up; None when there is none."""
     import json
-    try:
-        with open(os.path.join(folder, "config.json")) as f:
-            record = json.load(f).get("dataset")
-    except (OSError, ValueError, AttributeError):
-        return None
-    return record if isinstance(record, dict) and record.get("path") else None
+    for candidate in (folder, os.path.dirname(folder)):
+        try:
+            with open(os.path.join(candidate, "config.json")) as f:
+                record = json.load(f).get("dataset")
+        except (OSError, ValueError, AttributeError):
+            continue
+        if isinstance(record, dict) and record.get("path"):
+            return record
+    return None
+
+
+def camera_path(args, record):
+    """The cameras of ``--path``: a nerfstudio camera_path.json, or a path made from the capture's
+    training views (``--cameras DATASET``, else the run's own dataset)."""
+    from mi_voldis import camera_paths
+    if args.path.endswith(".json"):
+        return camera_paths.read_nerfstudio_path(args.path, args.dataparser_transforms)
+    if args.path not in camera_paths.PATHS:
+        raise ValueError(f"--path must be {', '.join(camera_paths.PATHS)} or a camera_path.json, got '{args.path}'")
+    from mi_voldis.data import load_dataset
+    from mi_voldis.tasks.base import load_recorded
+    if args.cameras:
+        ds = load_recorded(record, args.cameras) if record else load_dataset(args.cameras)
+    elif record:
+        ds = load_recorded(record)
+    else:
+        raise ValueError(f"{args.scene}: no run config.json beside it to find the capture; give --cameras DATASET")
+    return camera_paths.make_path(args.path, [ds.cameras[v] for v in ds.train], args.frames, ds.near_far)
 
 
 def main(argv=None):
@@ -36,6 +63,13 @@ def main(argv=None):
     ap.add_argument("--height", type=positive, help="override the films' height")
     ap.add_argument("--cameras", help="render from this dataset's cameras instead of the scene's sensors")
     ap.add_argument("--split", default="test", choices=("train", "test", "all"), help="views of --cameras")
+    ap.add_argument("--path", metavar="KIND", help="a camera path instead: orbit, spiral, interpolate (through the "
+                    "capture's views) or a nerfstudio camera_path.json; writes an EXR sequence and a video")
+    ap.add_argument("--frames", type=positive, default=60, help="frames of --path orbit / spiral / interpolate")
+    ap.add_argument("--fps", type=positive, default=24, help="video frame rate")
+    ap.add_argument("--layer", default="composite", choices=("composite", "full", "bg", "fg"),
+                    help="the layer shown in the video")
+    ap.add_argument("--dataparser-transforms", help="nerfstudio's dataparser_transforms.json for a camera_path.json")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant (default: llvm_ad_rgb)")
     ap.add_argument("--quiet", action="store_true", help="print nothing but errors")
     add_debug(ap)
@@ -46,16 +80,25 @@ def main(argv=None):
         raise ValueError(f"{args.out}: exists and is not a folder")
 
     os.environ["MI_VOLDIS_VARIANT"] = args.variant  # chosen before the first import of mi_voldis
-    from mi_voldis.export import render_scene_files
+    from mi_voldis.export import render_path, render_scene_files
     from mi_voldis.scene import load_scene
 
     scene = load_scene(args.scene)
     size = (args.width, args.height) if args.width else None
     cameras = None
+    record = run_record(os.path.dirname(os.path.abspath(args.scene)))
+    if args.path:
+        path_cameras = camera_path(args, record)
+        if size:
+            from mi_voldis.cameras import Camera
+            path_cameras = [Camera(c.to_world, c.fov_x, *size, c.principal) for c in path_cameras]
+        exrs, video = render_path(scene, args.out, path_cameras, args.spp, args.layer, args.fps)
+        if not args.quiet:
+            print(f"{len(exrs)} frames: {os.path.dirname(exrs[0])}/frame_NNNN.exr\nvideo: {video}")
+        return
     if args.cameras:
         from mi_voldis.data import load_dataset
         from mi_voldis.tasks.base import load_recorded
-        record = run_record(os.path.dirname(os.path.abspath(args.scene)))
         ds = load_recorded(record, args.cameras) if record else load_dataset(args.cameras)
         views = range(len(ds.cameras)) if args.split == "all" else (ds.test if args.split == "test" else ds.train)
         if not len(views):

@@ -19,6 +19,7 @@ import struct
 
 import numpy as np
 
+from ..transforms import quaternion_to_rotation
 from .conventions import camera_from_intrinsics
 from .images import check_sizes, is_linear, mask_folder_paths, read_image, read_masks
 from .lens import COLMAP_MODELS, LensError, lens_from_colmap
@@ -35,13 +36,6 @@ def model_folder(root):
         if any(os.path.isfile(os.path.join(d, f"cameras.{ext}")) for ext in ("bin", "txt")):
             return d
     return None
-
-
-def qvec_to_rotation(q):
-    w, x, y, z = np.asarray(q, np.float64) / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 class _Reader:
@@ -192,7 +186,7 @@ def load_colmap(root, holdout=8, factor=None):
         (fx, cx, cy), resample = undistorters[cam_id]
         images[k] = resample(images[k])
         world_to_cam = np.eye(4)
-        world_to_cam[:3, :3], world_to_cam[:3, 3] = qvec_to_rotation(q), t
+        world_to_cam[:3, :3], world_to_cam[:3, 3] = quaternion_to_rotation(q), t
         if not np.all(np.isfinite(world_to_cam)):
             raise DatasetError(f"{folder}: image {name} has a non-finite pose")
         cameras.append(camera_from_intrinsics(np.linalg.inv(world_to_cam) @ CV_TO_MI, w, h, fx, cx, cy))

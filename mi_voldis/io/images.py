@@ -32,15 +32,32 @@ def display_to_uint8(rgb):
     return np.round(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
-def depth_to_uint8(z, alpha=None):
-    """Depth map -> grey uint8, near = bright, normalised over pixels with alpha > 0.5."""
+def depth_to_uint8(z, alpha=None, bar=True):
+    """Depth map -> colour uint8 (matplotlib's viridis, near = bright), over the 1st..99th percentile of
+    the pixels with alpha > 0.5 (black elsewhere); ``bar``: on images at least 96 pixels wide, a colour
+    bar at the right edge labelled with that range in world units (distance along the ray)."""
+    from matplotlib import colormaps
     z = np.asarray(z, dtype=np.float64)
     mask = (np.asarray(alpha) > 0.5) if alpha is not None else z > 0
     if not mask.any():
         return np.zeros(z.shape + (3,), np.uint8)
     lo, hi = np.percentile(z[mask], [1, 99])
-    v = np.where(mask, 1.0 - (z - lo) / max(hi - lo, 1e-8), 0.0)
-    return np.repeat((np.clip(v, 0, 1) * 255).astype(np.uint8)[..., None], 3, axis=2)
+    v = np.clip(1.0 - (z - lo) / max(hi - lo, 1e-8), 0, 1)
+    cmap = colormaps["viridis"]
+    img = np.where(mask[..., None], cmap(v)[..., :3], 0.0)
+    img = (img * 255).astype(np.uint8)
+    h, w = z.shape
+    if bar and w >= 96:
+        import cv2
+        bw = max(6, w // 40)
+        ramp = cmap(np.linspace(1, 0, h))[:, :3]  # near (bright) at the top
+        img[:, w - bw:] = (ramp[:, None, :] * 255).astype(np.uint8)
+        scale = max(0.3, min(0.5, w / 640))
+        for text, y in ((f"{lo:.3g}", int(14 * scale / 0.4)), (f"{hi:.3g} units", h - 4)):
+            size = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 1)[0][0]
+            cv2.putText(img, text, (w - bw - size - 3, y), cv2.FONT_HERSHEY_SIMPLEX, scale, (255, 255, 255), 1,
+                        cv2.LINE_AA)
+    return img
 
 
 def write_png(path, image):
@@ -50,17 +67,24 @@ def write_png(path, image):
     os.replace(tmp, path)
 
 
-def contact_sheet(images, columns=None, pad=4):
-    """Tile uint8 images into a grid on a white background, ``columns`` per row (default: one row)."""
+def contact_sheet(images, columns=None, pad=4, labels=None):
+    """Tile uint8 images into a grid on a white background, ``columns`` per row (default: one row);
+    ``labels``: a caption above each tile (black on the white margin)."""
     if not images:
         raise ValueError("contact_sheet needs at least one image")
     h = max(im.shape[0] for im in images)
     w = max(im.shape[1] for im in images)
     columns = columns or len(images)
     rows = (len(images) + columns - 1) // columns
-    sheet = np.full((rows * (h + pad) + pad, columns * (w + pad) + pad, 3), 255, np.uint8)
+    scale = max(0.3, min(0.5, w / 320))  # OpenCV's Hershey font: ~22 px tall at scale 1
+    band = int(round(24 * scale)) + 4 if labels else 0
+    sheet = np.full((rows * (h + pad + band) + pad, columns * (w + pad) + pad, 3), 255, np.uint8)
     for n, im in enumerate(images):
         r, c = divmod(n, columns)
-        y, x = pad + r * (h + pad), pad + c * (w + pad)
+        y, x = pad + r * (h + pad + band) + band, pad + c * (w + pad)
         sheet[y:y + im.shape[0], x:x + im.shape[1]] = im[..., :3]
+        if labels and n < len(labels) and labels[n]:
+            import cv2
+            cv2.putText(sheet, str(labels[n]), (x + 1, y - 4), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 1,
+                        cv2.LINE_AA)
     return sheet

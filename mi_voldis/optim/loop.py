@@ -64,7 +64,7 @@ def optimize(problem, adam, *, steps, start=0, final_ratio=0.1, log=None, desc="
         dr.sync_thread()
         dt = time.perf_counter() - t0
         elapsed += dt
-        row = {"step": step + 1, "time": elapsed, "loss": loss_value, "step_seconds": dt, **stats}
+        row = {"step": step + 1, "time": elapsed, "loss": loss_value, "step_seconds": dt, "phase": desc, **stats}
         if "samples" in stats:
             row["msps"] = stats["samples"] / dt / 1e6
         if eval_fn is not None and eval_every and ((step + 1) % eval_every == 0 or step + 1 == end()):
