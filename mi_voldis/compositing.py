@@ -12,12 +12,16 @@ identity a compositor relies on (Porter-Duff "over", premultiplied, linear light
 
     full = fg + (1 - fg.A) bg,
 
-with fg.A = min(1, sum_i max(w_fg,i, 0)) the object's matte (how much of the ray the object covers,
-``fg.coverage`` from the integrator) and fg.RGB = full - (1 - fg.A) bg, clipped to [0, fg.A]. Where the
-two fields agree the clip does nothing and the identity holds to rounding; where they disagree
-without the object (fitting noise), the clip makes the layer empty rather than a smear of signed
-colour. fg.Z is the full field's depth where the matte is non-zero (there the object is the first
-surface), 0 elsewhere.
+per colour channel, and fg.RGB = full - (1 - fg.A) bg. For fg to be a valid premultiplied colour
+(0 <= fg.RGB <= fg.A) the matte must be at least, per channel c (difference matting),
+
+    a_min = max(0, max_c 1 - full_c / bg_c, max_c (full_c - bg_c) / (1 - bg_c)),
+
+and fg.A = min(1, max(coverage, a_min)), with coverage = sum_i max(w_fg,i, 0) (how much of the ray the
+object covers, ``fg.coverage`` from the integrator); a_min is taken with a slack of
+:data:`IDENTITY_TOL` on both bounds. The identity then holds at every pixel to within that slack;
+where the fields agree a_min is 0 and the layer is as empty as the coverage. fg.Z is the
+full field's depth where the matte is non-zero (there the object is the first surface), 0 elsewhere.
 
 Depth channels (``depth.Z``, ``<layer>.Z``) are distances along the camera ray from its origin, in
 world units, 0 where the layer is empty.
@@ -27,6 +31,7 @@ import numpy as np
 from .io.images import srgb_to_linear
 
 LAYERS = ("full", "bg", "fg", "res")
+IDENTITY_TOL = 1e-3  # how far (linear light) full may differ from fg over bg: the matte ignores less
 
 
 def linear_layer(rgb, alpha):
@@ -56,12 +61,24 @@ def composite_channels(channels):
             linear[layer] = linear_layer(_rgb(channels, f"{layer}."), channels[f"{layer}.A"])
             out.update(_layer(layer, *linear[layer], channels[f"{layer}.Z"]))
     if "fg.coverage" in channels and "full" in linear and "bg" in linear:
-        matte = np.clip(channels["fg.coverage"], 0.0, 1.0).astype(np.float32)
-        full, bg = linear["full"][0], linear["bg"][0]
+        full, bg = linear["full"][0].astype(np.float64), linear["bg"][0].astype(np.float64)
+        matte = np.clip(np.maximum(channels["fg.coverage"], minimum_matte(full, bg)), 0.0, 1.0)
         fg = np.clip(full - (1.0 - matte[..., None]) * bg, 0.0, matte[..., None]).astype(np.float32)
+        matte = matte.astype(np.float32)
         z = np.where(matte > 0, channels["full.Z"], 0.0).astype(np.float32)
         out.update(_layer("fg", fg, matte, z))
     return out
+
+
+def minimum_matte(full, bg, tol=IDENTITY_TOL, eps=1e-6):
+    """The smallest alpha a for which fg = full - (1 - a) bg satisfies -tol <= fg <= a + tol in every
+    channel (premultiplied linear colours, (..., 3)); see the module docstring. The slack ``tol`` keeps
+    differences between the fields below it (rounding, fitting noise in dark colours, where the ratio
+    full / bg is unstable) out of the matte."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        below = np.where(bg > eps, 1.0 - (full + tol) / np.maximum(bg, eps), 0.0)  # fg >= -tol
+        above = np.where(bg < 1 - eps, (full - bg - tol) / np.maximum(1.0 - bg, eps), 0.0)  # fg <= a + tol
+    return np.maximum(0.0, np.maximum(below, above).max(axis=-1))
 
 
 def _layer(name, rgb, a, z):
