@@ -81,7 +81,7 @@ def _rule_note(m, given):
 
 
 def _turntable(run, out, name):
-    """An orbit of the moved object (left) beside the original scene (right), as a video."""
+    """An orbit of the moved object (left) beside the original scene (right: the full field), as a video."""
     from .api import Edit, load_run
     from .camera_paths import make_path
     from .video import write_video
@@ -91,7 +91,7 @@ def _turntable(run, out, name):
     frames = []
     for cam in cams:
         a = moved.render(cam, layers=("composite",), linear=False)["composite"]
-        b = fitted.render(cam, layers=("composite",), linear=False)["composite"]
+        b = fitted.render(cam, layers=("full",), linear=False)["full"]  # the original: the full field
         frames.append(np.concatenate([_display(a), _display(b)], axis=1))
     return write_video(os.path.join(out, f"{name}_turntable"), frames, fps=12)
 
