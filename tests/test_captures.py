@@ -306,3 +306,19 @@ def test_recorded_dataset_loads_as_fitted(tmp_path):
     record = json.loads(json.dumps(dataset_record(root, ds, 4, None)))
     again = load_recorded(record)
     assert list(again.test) == [0, 4, 8] == list(ds.test) and record["format"] == "transforms"
+
+
+def test_make_dataset_writes_the_spinnerf_layout(tmp_path):
+    """A bundled scene rendered in SPIn-NeRF's layout reads back with the object-free views as test
+    views whose photos are the ground truth, spread over the rig."""
+    from mi_voldis.synth.make import make_dataset, spinnerf_tests
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = str(tmp_path / "spin")
+    make_dataset(os.path.join(root, "scenes", "tabletop.xml"), out, views=10, resolution=(32, 24), spp=2,
+                 progress=False, layout="spinnerf")
+    assert sorted(os.listdir(out)) == ["images_4", "poses_bounds.npy"]
+    ds = load_dataset(out)
+    assert list(ds.test) == [0, 1, 2, 3] and len(ds.train) == 6
+    np.testing.assert_array_equal(ds.backgrounds[ds.test], ds.images[ds.test])
+    assert all(ds.masks[v].any() for v in range(10))
+    assert spinnerf_tests(10) == [0, 3, 6, 9]  # spread over the rig, not its first four
