@@ -25,7 +25,7 @@ from ..device import from_numpy
 from ..field_state import FieldState, density_raw_for_alpha, resample
 from ..inpaint2d import fill_disparity, inpainter
 from ..metrics import dilate
-from ..render.views import median_depth, render_camera
+from ..render.views import render_camera
 from .fields import fit_integrator
 from .hull import visual_hull
 from .visibility import pixel_points, seen_elsewhere
@@ -160,9 +160,8 @@ def empty_keys(field, keys, empty_raw):
 
 
 def training_depths(inputs, state, count=24, extra=()):
-    """Full-field median depth maps (:func:`~mi_voldis.render.views.median_depth`) of ``count``
-    training views spread over the set (and of ``extra``); NaN where a ray ends on nothing (its
-    transmittance stays above a half)."""
+    """Full-field depth maps of ``count`` training views spread over the set (and of ``extra``); NaN
+    where a ray ends on nothing (opacity below a half)."""
     ds = inputs.ds
     train = list(ds.train)
     pick = np.unique(np.linspace(0, len(train) - 1, min(count, len(train))).round().astype(int))
@@ -170,8 +169,8 @@ def training_depths(inputs, state, count=24, extra=()):
     integrator = fit_integrator(inputs, state)
     out = {}
     for u in views:
-        depth, hit = median_depth(integrator, ds.cameras[u])
-        out[u] = np.where(hit, depth, np.nan)
+        _, alpha, depth = render_camera(integrator, ds.cameras[u], ("full",))["full"]
+        out[u] = np.where(alpha > 0.5, depth, np.nan)
     return out
 
 
