@@ -19,22 +19,12 @@ import json
 
 import numpy as np
 
-from .cameras import Camera
+from .cameras import Camera, look_at
 from .data.conventions import opengl_to_mitsuba
 from .data.scene_box import average_pose, look_at_point
 from .transforms import quaternion_to_rotation, rotation_to_quaternion
 
 PATHS = ("orbit", "spiral", "interpolate")
-
-
-def _look(origin, target, up):
-    forward = target - origin
-    forward /= np.linalg.norm(forward)
-    left = np.cross(up, forward)
-    left /= np.linalg.norm(left)
-    m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, np.cross(forward, left), forward, origin
-    return m
 
 
 def _like(camera, to_world):
@@ -55,7 +45,7 @@ def orbit(cameras, frames):
     for k in range(frames):
         a = 2 * np.pi * k / frames
         pos = target + height * up + radius * (np.cos(a) * e1 + np.sin(a) * e2)
-        out.append(_like(cameras[0], _look(pos, target, up)))
+        out.append(_like(cameras[0], look_at(pos, target, up)))
     return out
 
 
@@ -85,7 +75,7 @@ def spiral(cameras, frames, near_far=None, rotations=2):
     for k in range(frames):
         a = 2 * np.pi * rotations * k / frames
         pos = centre + rx * np.cos(a) * left + ry * np.sin(a) * up + 0.5 * min(rx, ry) * np.sin(a / rotations) * forward
-        out.append(_like(cameras[0], _look(pos, focus, up)))
+        out.append(_like(cameras[0], look_at(pos, focus, up)))
     return out
 
 

@@ -55,6 +55,18 @@ class Camera:
                 "sampler": {"type": "independent", "sample_count": spp}}
 
 
+def look_at(origin, target, up=(0.0, 1.0, 0.0)):
+    """Mitsuba-frame camera-to-world matrix (+x left, +y up, +z forward) looking from origin at target."""
+    origin, target, up = (np.asarray(v, np.float64) for v in (origin, target, up))
+    forward = target - origin
+    forward /= np.linalg.norm(forward)
+    left = np.cross(up, forward)
+    left /= np.linalg.norm(left)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, np.cross(forward, left), forward, origin
+    return m
+
+
 def film_to_camera(u, v, tan_x, tan_y, offset_x, offset_y):
     """Camera-frame direction (x, y, 1) through film position (u, v) (see the module docstring)."""
     return (0.5 - u - offset_x) * tan_x, (0.5 - v - offset_y) * tan_y

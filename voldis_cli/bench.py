@@ -46,20 +46,15 @@ def main(argv=None):
     from mi_voldis.bench import report
     from mi_voldis.bench.run import run_all, run_masks, run_removal
     scenes = args.scenes.split(",") if args.scenes else None
-    if args.removal:
-        results = run_removal(os.path.abspath(args.work), args.report, scenes)
-        command = "python scripts/bench.py --removal" + (f" --scenes {args.scenes}" if args.scenes else "")
-        path = report.write_removal(results, args.report, command)
-        if not args.quiet:
-            print(path)
-        return
-    if args.masks:
-        results = run_masks(os.path.abspath(args.work), args.report, scenes)
-        command = "python scripts/bench.py --masks" + (f" --scenes {args.scenes}" if args.scenes else "")
-        path = report.write_masks(results, args.report, command)
-        if not args.quiet:
-            print(path)
-        return
+    for flag, (measure, write) in {"removal": (run_removal, report.write_removal),
+                                   "masks": (run_masks, report.write_masks)}.items():
+        if getattr(args, flag):  # one section alone, with its own report
+            results = measure(os.path.abspath(args.work), args.report, scenes)
+            path = write(results, args.report, f"python scripts/bench.py --{flag}" +
+                         (f" --scenes {args.scenes}" if args.scenes else ""))
+            if not args.quiet:
+                print(path)
+            return
     results = run_all(args.quick, os.path.abspath(args.work), args.report, scenes)
     command = "python scripts/bench.py" + (" --quick" if args.quick else "") + \
         (f" --scenes {args.scenes}" if args.scenes else "")

@@ -6,6 +6,7 @@ the traceback. Standard library only: the scripts choose the Mitsuba variant bef
 mi_voldis.
 """
 import argparse
+import os
 import sys
 
 USER_ERRORS = ("ValueError", "OSError", "DatasetError", "FileNotFoundError", "PermissionError", "IsADirectoryError",
@@ -42,6 +43,28 @@ def run(main, argv=None):
         print(f"error: {one_line(e)}{hint}", file=sys.stderr)
         return 1
     return 0
+
+
+def variant_first(argv):
+    """Set ``$MI_VOLDIS_VARIANT`` from ``--variant`` in ``argv`` before anything imports mi_voldis (which
+    selects the Mitsuba variant when imported)."""
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--variant", default="llvm_ad_rgb")
+    os.environ["MI_VOLDIS_VARIANT"] = pre.parse_known_args(argv)[0].variant
+
+
+def parser_of(doc, epilog=None):
+    """An argument parser described by a program's docstring: its first paragraph, then the rest (or
+    ``epilog``) after the options."""
+    return argparse.ArgumentParser(description=doc.split("\n\n")[0],
+                                   epilog=doc.split("\n\n", 1)[1] if epilog is None else epilog,
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
+def check_run(path):
+    """A run folder must exist (one line naming it otherwise)."""
+    if not os.path.isdir(path):
+        raise ValueError(f"{path}: no such run folder (scripts/train.py writes one)")
 
 
 def add_debug(parser):

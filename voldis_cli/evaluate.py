@@ -9,20 +9,15 @@ views photographed without the object) or a transforms.json dataset with backgro
 inside the dilated mask and inside the mask's bounding box, per view and their means; LPIPS with a
 local weights folder (see mi_voldis/lpips.py for the files it needs).
 """
-import argparse
 import json
-import os
 import sys
 
-from .boundary import add_debug, run
+from .boundary import add_debug, check_run, parser_of, run, variant_first
 
 
 def main(argv=None):
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--variant", default="llvm_ad_rgb")
-    os.environ["MI_VOLDIS_VARIANT"] = pre.parse_known_args(argv)[0].variant  # before mi_voldis is imported
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    variant_first(argv)
+    ap = parser_of(__doc__)
     ap.add_argument("run", help="run folder written by scripts/train.py")
     ap.add_argument("dataset", nargs="?", help="dataset with ground truth (default: the run's own)")
     ap.add_argument("--dilate", type=float, default=0.01, help="mask dilation, fraction of the image diagonal")
@@ -34,8 +29,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     if not 0 <= args.dilate < 0.5:
         ap.error(f"--dilate must be in [0, 0.5), got {args.dilate}")
-    if not os.path.isdir(args.run):
-        raise ValueError(f"{args.run}: no such run folder (scripts/train.py writes one)")
+    check_run(args.run)
     from mi_voldis.evaluate import evaluate_removal
     from mi_voldis.tasks.base import FittedRun
     fitted = FittedRun(args.run, args.dataset)

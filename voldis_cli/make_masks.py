@@ -9,12 +9,11 @@ the given masks or box into 3D through the field's surface (mi_voldis/masks3d.py
 unmasked. VIEW: an image name, its stem or its index. The box is in world units (the dataset's poses),
 whatever scene space the fit uses. scripts/train.py then reads DATASET/masks/.
 """
-import argparse
 import json
 import os
 import sys
 
-from .boundary import add_debug, run
+from .boundary import add_debug, parser_of, run, variant_first
 
 
 def parse_box(text):
@@ -28,11 +27,8 @@ def parse_box(text):
 
 
 def main(argv=None):
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--variant", default="llvm_ad_rgb")
-    os.environ["MI_VOLDIS_VARIANT"] = pre.parse_known_args(argv)[0].variant  # before mi_voldis is imported
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    variant_first(argv)
+    ap = parser_of(__doc__)
     ap.add_argument("dataset", help="dataset folder (transforms.json, LLFF or COLMAP)")
     ap.add_argument("--out", required=True, help="folder of the masks to write (replaced when complete)")
     how = ap.add_mutually_exclusive_group(required=True)

@@ -9,12 +9,11 @@ Every task setting (listed below, defined in mi_voldis/tasks/settings.py) can be
 --config FILE. Writes RUN/<task>/ (volumes, scene.xml, config.json, EXR layers, previews, metrics.json,
 loss.png).
 """
-import argparse
 import json
 import os
 import sys
 
-from .boundary import add_debug, run
+from .boundary import add_debug, check_run, parser_of, run, variant_first
 
 # shorthand flags: flag -> (setting, how to read its text)
 FLAGS = {"steps": ("steps", int), "checkpoint_every": ("checkpoint_every", int), "seed": ("seed", int),
@@ -34,13 +33,10 @@ def vector(text, flag):
 
 
 def main(argv=None):
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--variant", default="llvm_ad_rgb")
-    os.environ["MI_VOLDIS_VARIANT"] = pre.parse_known_args(argv)[0].variant  # before mi_voldis is imported
+    variant_first(argv)
     from mi_voldis.tasks.settings import SETTINGS
     epilog = "\n\n".join(cls.help_text(f"{task} settings") for task, cls in SETTINGS.items())
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=epilog,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = parser_of(__doc__, epilog)
     ap.add_argument("run", help="run directory written by scripts/train.py")
     ap.add_argument("--task", required=True, choices=tuple(SETTINGS))
     ap.add_argument("--dataset", help="dataset folder (default: the one the run was fitted on)")
@@ -64,8 +60,7 @@ def main(argv=None):
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
     add_debug(ap)
     args = ap.parse_args(argv)
-    if not os.path.isdir(args.run):
-        raise ValueError(f"{args.run}: no such run folder (scripts/train.py writes one)")
+    check_run(args.run)
     values = {}
     for flag, (name, kind) in FLAGS.items():
         text = getattr(args, flag)

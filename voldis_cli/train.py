@@ -5,21 +5,16 @@
 Writes RUN/ (fields as <role>_grid.npz, scene.xml, config.json, metrics.json, previews/, training.png;
 checkpoints/ while it runs). The settings are listed below (defined in mi_voldis/fit/config.py).
 """
-import argparse
 import json
-import os
 import sys
 
-from .boundary import add_debug, run
+from .boundary import add_debug, parser_of, run, variant_first
 
 
 def main(argv=None):
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--variant", default="llvm_ad_rgb")
-    os.environ["MI_VOLDIS_VARIANT"] = pre.parse_known_args(argv)[0].variant  # before mi_voldis is imported
+    variant_first(argv)
     from mi_voldis.fit.config import FitConfig
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=FitConfig.help_text(),
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = parser_of(__doc__, FitConfig.help_text())
     ap.add_argument("dataset", help="dataset folder (transforms.json or LLFF poses_bounds.npy)")
     ap.add_argument("--out", required=True, help="run directory")
     ap.add_argument("--config", help="JSON file of settings (a finished run's RUN/config.json works too)")

@@ -193,14 +193,17 @@ def _copy_previews(run, report_dir, scene):
     return out
 
 
+def _section_header(title, results, command):
+    return [f"# {title}", "", f"Run {results['date']} with `{command}` ({results['seconds'] / 60:.1f} min). "
+            f"Machine: {results['machine']['cpu']}, {results['machine']['cores']} cores; variant "
+            f"`{results['machine']['variant']}`.", ""]
+
+
 def write_removal(results, report_dir, command):
     """reports/removal.md: one table per scene (strategy rows, OpenCV beside), previews copied beside it.
     Returns the file's path."""
     os.makedirs(report_dir, exist_ok=True)
-    md = ["# Removal by background strategy", "",
-          f"Run {results['date']} with `{command}` ({results['seconds'] / 60:.1f} min). Machine: "
-          f"{results['machine']['cpu']}, {results['machine']['cores']} cores; variant "
-          f"`{results['machine']['variant']}`.", "",
+    md = _section_header("Removal by background strategy", results, command) + [
           "Each scene is fitted once with the default command (`scripts/train.py DATA --out RUN "
           "--keep-checkpoints`, no setting); from its full field the background is fitted again with each "
           "`bg_strategy` (`python -m mi_voldis.bench.strategies RUN STRATEGY OUT`, every other setting as "
@@ -281,10 +284,7 @@ def write_masks(results, report_dir, command):
     """reports/masks.md: masks from two views against exact coverage, and removal with them beside
     removal with every true mask; a sheet per scene. Returns the file's path."""
     os.makedirs(report_dir, exist_ok=True)
-    md = ["# Object masks from two views", "",
-          f"Run {results['date']} with `{command}` ({results['seconds'] / 60:.1f} min). Machine: "
-          f"{results['machine']['cpu']}, {results['machine']['cores']} cores; variant "
-          f"`{results['machine']['variant']}`.", "",
+    md = _section_header("Object masks from two views", results, command) + [
           "Per scene, from the removal section's default fit (its full field): two training views get their "
           "true masks (the first training view and the one that sees the rig's common target from the "
           "direction closest to 90 degrees from the first's: `mi_voldis.bench.masks.given_views`), "

@@ -143,17 +143,35 @@ def make_data(scene, out, log_dir, quick):
 STRATEGIES = ["lift", "clear", "harmonic"]  # bg_strategy values compared from one fitted full field
 
 
+def ground_truth_fits(work, scenes, results):
+    """(scene, dataset, default fit kept with its checkpoint, logs folder) of every ground-truth scene
+    (bundled and random; ``scenes`` picks some), made when missing; ``results['seconds']`` is set when
+    the loop ends."""
+    logs = os.path.join(work, "logs")
+    os.makedirs(logs, exist_ok=True)
+    t0 = time.perf_counter()
+    for scene in [s for s in SCENES + [f"random{k}" for k in RANDOM_SEEDS] if not scenes or s in scenes]:
+        data = make_data(scene, os.path.join(work, "data", scene), logs, False)
+        yield scene, data, fit(data, os.path.join(work, "runs", f"{scene}_0"), [], logs, keep=True), logs
+    results["seconds"] = time.perf_counter() - t0
+
+
+def new_results():
+    return {"machine": machine.describe(), "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "scenes": {}}
+
+
+def save_results(results, report_dir, name):
+    os.makedirs(report_dir, exist_ok=True)
+    with open(os.path.join(report_dir, name), "w") as f:
+        json.dump(results, f, indent=1, default=float)
+    return results
+
+
 def run_removal(work, report_dir, scenes=None):
     """Removal by background strategy on every ground-truth scene (bundled and random), each from the
     default command's full field (:mod:`mi_voldis.bench.strategies`); previews copied to ``report_dir``."""
-    logs = os.path.join(work, "logs")
-    os.makedirs(logs, exist_ok=True)
-    names = [s for s in SCENES + [f"random{k}" for k in RANDOM_SEEDS] if not scenes or s in scenes]
-    results = {"machine": machine.describe(), "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "scenes": {}}
-    t0 = time.perf_counter()
-    for scene in names:
-        data = make_data(scene, os.path.join(work, "data", scene), logs, False)
-        run = fit(data, os.path.join(work, "runs", f"{scene}_0"), [], logs, keep=True)
+    results = new_results()
+    for scene, _, run, logs in ground_truth_fits(work, scenes, results):
         rows = {}
         for strategy in STRATEGIES:
             out = os.path.join(work, "removal", scene, strategy)
@@ -164,24 +182,14 @@ def run_removal(work, report_dir, scenes=None):
                                   "command": "python " + " ".join(args)}
         run.pop("curve", None)
         results["scenes"][scene] = {"fit": run, "strategies": rows}
-    results["seconds"] = time.perf_counter() - t0
-    os.makedirs(report_dir, exist_ok=True)
-    with open(os.path.join(report_dir, "removal.json"), "w") as f:
-        json.dump(results, f, indent=1, default=float)
-    return results
+    return save_results(results, report_dir, "removal.json")
 
 
 def run_masks(work, report_dir, scenes=None):
     """Masks from two views on every ground-truth scene (:mod:`mi_voldis.bench.masks`), from the removal
     section's fits (made here when missing), beside the removal with every ground-truth mask."""
-    logs = os.path.join(work, "logs")
-    os.makedirs(logs, exist_ok=True)
-    names = [s for s in SCENES + [f"random{k}" for k in RANDOM_SEEDS] if not scenes or s in scenes]
-    results = {"machine": machine.describe(), "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "scenes": {}}
-    t0 = time.perf_counter()
-    for scene in names:
-        data = make_data(scene, os.path.join(work, "data", scene), logs, False)
-        run = fit(data, os.path.join(work, "runs", f"{scene}_0"), [], logs, keep=True)
+    results = new_results()
+    for scene, data, run, logs in ground_truth_fits(work, scenes, results):
         base = os.path.join(work, "removal", scene, "harmonic")
         if not os.path.isfile(os.path.join(base, "metrics.json")):
             child(["-m", "mi_voldis.bench.strategies", run["out"], "harmonic", base],
@@ -198,11 +206,7 @@ def run_masks(work, report_dir, scenes=None):
             row["removal_true_masks"] = json.load(f)
         results["scenes"][scene] = {**row, "wall_seconds": wall, "out": out, "data": data,
                                     "command": "python " + " ".join(args)}
-    results["seconds"] = time.perf_counter() - t0
-    os.makedirs(report_dir, exist_ok=True)
-    with open(os.path.join(report_dir, "masks.json"), "w") as f:
-        json.dump(results, f, indent=1, default=float)
-    return results
+    return save_results(results, report_dir, "masks.json")
 
 
 # ------------------------------------------------------------------------------------ 5. accuracy

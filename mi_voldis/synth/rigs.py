@@ -1,19 +1,7 @@
 """Camera rigs for synthetic datasets: an orbit (360 degrees) and a forward-facing grid (LLFF-like)."""
 import numpy as np
 
-from ..cameras import Camera
-
-
-def look_at(origin, target, up=(0.0, 1.0, 0.0)):
-    """Mitsuba-frame camera-to-world matrix (+x left, +y up, +z forward) looking from origin at target."""
-    origin, target, up = (np.asarray(v, np.float64) for v in (origin, target, up))
-    forward = target - origin
-    forward /= np.linalg.norm(forward)
-    left = np.cross(up, forward)
-    left /= np.linalg.norm(left)
-    m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, np.cross(forward, left), forward, origin
-    return m
+from ..cameras import Camera, look_at  # noqa: F401  (look_at: the rigs' camera frame)
 
 
 def orbit(views, target, radius, elevation_deg, fov_deg, width, height):
