@@ -149,10 +149,13 @@ def test_a_lifted_surface_looks_the_same_from_every_view():
     assert np.abs(got - expected).mean() < 0.05
 
 
-def synthetic_object_scene(views=10, size=(40, 30)):
+def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_raw=4.0, empty=-20.0):
     """A textured floor with a red sphere standing on it: the photos rendered from the truth, with exact
     masks and the ground-truth background (the floor alone), and as the fitted full field the truth
-    plus a faint red haze around the sphere, as fits leave."""
+    plus a faint red haze around the sphere, as fits leave; ``hidden_floor``: without the floor under
+    the sphere's footprint, which no photo shows (a fit leaves nothing there); ``sphere_raw``: the
+    sphere's raw density (the floor's is 4); ``empty``: the raw density of empty space in the full
+    field (a fit leaves about -7, opacity 1e-3 per voxel, where the gradient still flows)."""
     from mi_voldis.fit.fields import FitInputs
     from mi_voldis.fit.state import FitState
     from mi_voldis.optim.adam import Adam
@@ -173,14 +176,16 @@ def synthetic_object_scene(views=10, size=(40, 30)):
     for name, field in fields.items():
         values = np.array(field.data).reshape(-1, width)
         block = values[: full.layout.vertices_per_brick].copy()
-        values[:, 0] = np.where(is_floor, dense, -20.0)
+        values[:, 0] = np.where(is_floor, dense, empty if name == "full" else -20.0)
         values[:, 1:4] = np.where(is_floor[:, None], np.log(texture / (1 - texture)), -10.0)
         if name != "floor":
             obj = (r < radius) & real
             fog = (r >= radius) & (r < radius + 3 * voxel) & real & ~is_floor & (name == "full")
             values[obj | fog, 1:4] = np.log(np.array([0.9, 0.1, 0.1]) / np.array([0.1, 0.9, 0.9]))
-            values[obj, 0] = dense
+            values[obj, 0] = sphere_raw
             values[fog, 0] = haze
+            if hidden_floor and name == "full":
+                values[is_floor & (np.hypot(pts[:, 0] - centre[0], pts[:, 2] - centre[2]) < radius), 0] = empty
         values[: full.layout.vertices_per_brick] = block
         field.data = from_numpy(mi.Float, values.ravel())
         out[name] = field
@@ -243,3 +248,79 @@ def test_removal_leaves_nothing_of_the_object(strategy, tmp_path):
     if strategy == "lift":
         assert set(state.prior["reference_views"]) <= set(ds.train.tolist())
         assert state.prior["vertices_written"] > 0
+
+
+def test_the_inpainting_hole_takes_in_occluders_in_front_of_the_object_only():
+    """Around a mask whose object stands at depth 2 in front of a wall at 5, a post at depth 1 touching
+    the mask joins the hole (within the ring), the wall does not, nor the post beyond the ring."""
+    from mi_voldis.fit.guide import inpainting_hole
+    h, w = 40, 60
+    depth = np.full((h, w), 5.0)
+    region = np.zeros((h, w), bool)
+    region[15:25, 25:35] = True
+    depth[region] = 2.0
+    depth[:, 20:25] = 1.0  # the post, left of the mask, every row
+    hit = np.ones((h, w), bool)
+    hole = inpainting_hole(region, depth, hit, region, ring=4)
+    assert hole[region].all()
+    assert hole[15:25, 21:25].all()  # the post beside the mask
+    assert not hole[:10, 20:25].any()  # the post far above it: beyond the ring
+    assert not (hole & (depth == 5.0)).any()  # the wall stays a source
+    assert (inpainting_hole(region, depth, np.zeros((h, w), bool), region, 4) == region).all()  # no surfaces
+
+
+def test_the_colour_prior_continues_the_wall_behind_not_the_occluder():
+    """The prior's 2D fill inside the mask shows the wall's colour, not the post's beside it."""
+    from mi_voldis.fit.guide import inpainting_hole
+    h, w = 40, 60
+    image = np.full((h, w, 3), [0.5, 0.5, 0.5], np.float32)
+    depth = np.full((h, w), 5.0)
+    region = np.zeros((h, w), bool)
+    region[15:25, 25:35] = True
+    image[region], depth[region] = [0.9, 0.1, 0.1], 2.0
+    image[:, 18:25], depth[:, 18:25] = [0.1, 0.8, 0.1], 1.0  # a green post in front
+    telea = inpainter("telea")
+    plain = telea(image, region)[region]
+    aware = telea(image, inpainting_hole(region, depth, np.ones((h, w), bool), region, ring=8))[region]
+    grey = np.array([0.5, 0.5, 0.5])
+    assert np.abs(aware - grey).max() < 0.03
+    assert np.abs(plain - grey).max() > 0.15  # without it the post bleeds in
+
+
+def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only(tmp_path):
+    """The prior's rays are exactly the grown masks' pixels of the masked training views (a view without
+    a mask gives none), their colours each view's 2D inpainting there; the refit with it changes
+    nothing the views see outside the masks beyond what the harmonic refit changes."""
+    from mi_voldis.fit.fields import fit_integrator
+    from mi_voldis.fit.guide import colour_prior
+    from mi_voldis.fit.train import fit
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene(empty=-7.0)
+    ds.masked = np.ones(len(ds.images), bool)
+    unmasked = int(ds.train[-1])
+    ds.masked[unmasked], ds.masks[unmasked] = False, True  # a view without a mask: all True, not used
+    renders = {}
+    for strategy in ("harmonic", "guided"):
+        run_cfg = cfg.replace(bg_strategy=strategy, steps_bg=30)
+        adam = Adam({}, run_cfg.adam_beta1, run_cfg.adam_beta2)
+        state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), adam, fields={"full": full})
+        state.schedule, state.steps_full = [[0, 40]], 1
+        checkpoint = str(tmp_path / f"{strategy}.npz")
+        state.save(checkpoint, "bg", 0)
+        inputs, state = fit(ds, checkpoint, run_cfg, resume=True, progress=False)
+        assert ("psnr_prior" in state.log[-1]) == (strategy == "guided")
+        integ = fit_integrator(inputs, state)
+        renders[strategy] = {v: render_camera(integ, ds.cameras[v], ("bg",))["bg"][0] for v in ds.test}
+    bank, pool = colour_prior(inputs, state, "telea")
+    grow = int(np.ceil(0.01 * np.hypot(*ds.size)))
+    expected = np.stack([dilate(ds.masks[v], grow) if v != unmasked else np.zeros(ds.size, bool) for v in ds.train])
+    np.testing.assert_array_equal(np.sort(pool), np.flatnonzero(expected.reshape(-1)))
+    colours = np.array(bank.colors).reshape(len(ds.train), *ds.size, 3)
+    for k, v in enumerate(ds.train):
+        if v == unmasked:
+            continue
+        painted = inpainter("telea")(ds.images[v], expected[k])  # no occluder in this scene
+        np.testing.assert_allclose(colours[k][expected[k]], painted[expected[k]], atol=1e-6)
+        np.testing.assert_allclose(colours[k][~expected[k]], ds.images[v][~expected[k]], atol=0.51 / 255)  # 8-bit
+    for v in ds.test:
+        out = ~dilate(ds.masks[v], int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size))) + 2)
+        assert np.abs(renders["guided"][v][out] - renders["harmonic"][v][out]).max() < 5e-3

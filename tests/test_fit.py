@@ -175,7 +175,7 @@ def test_render_script_from_dataset_cameras(tiny_run, tmp_path):
     ("space=\"nowhere\"", 'space must be one of "auto", "contract", "world", "ndc"'),
     ("distortion=-0.1", "distortion must be a number >= 0"),
     ("sh_degree=2", 'sh_degree must be one of "auto", 0, 1, got 2'),
-    ("bg_strategy=\"magic\"", 'bg_strategy must be one of "lift", "clear", "harmonic", "scratch"'),
+    ("bg_strategy=\"magic\"", 'bg_strategy must be one of "lift", "clear", "harmonic", "guided", "scratch"'),
 ])
 def test_settings_are_validated_where_they_are_defined(item, message):
     with pytest.raises(ValueError, match=re.escape(f"--set {item}: ") + ".*" + re.escape(message)):

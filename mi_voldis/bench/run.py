@@ -86,11 +86,13 @@ QUICK_SETS = ["minutes=null", "steps_full=200", "steps_bg=40", "resolution_sched
 def fit(dataset, out, sets, log_dir, keep=False):
     """Fit ``dataset`` into ``out`` with the ``--set`` overrides ``sets``; a finished run of the same
     dataset and settings already in ``out`` is reused (delete it to fit again). ``keep``: the run keeps
-    its final checkpoint (the removal section refits the background from it)."""
+    its final checkpoint (the removal section refits the background from it, so that settings of the
+    background alone may differ)."""
     args = ["scripts/train.py", dataset, "--out", out, "--quiet"] + (["--keep-checkpoints"] if keep else [])
     for s in sets:
         args += ["--set", s]
-    if finished(out, dataset, sets) and (not keep or os.path.isfile(os.path.join(out, "checkpoints", "last.npz"))):
+    kept = os.path.isfile(os.path.join(out, "checkpoints", "last.npz"))
+    if finished(out, dataset, sets, BACKGROUND_SETTINGS if keep else ()) and (not keep or kept):
         seconds = None
     else:
         seconds = child(args, os.path.join(log_dir, os.path.basename(out) + ".log"))
@@ -105,8 +107,9 @@ def fit(dataset, out, sets, log_dir, keep=False):
                 os.path.join(out, "metrics.json"))))}
 
 
-def finished(out, dataset, sets):
-    """``out`` holds a finished fit of ``dataset`` with exactly the settings ``sets`` give."""
+def finished(out, dataset, sets, ignore=()):
+    """``out`` holds a finished fit of ``dataset`` with exactly the settings ``sets`` give (but those
+    named in ``ignore``)."""
     from ..fit.config import FitConfig
     try:
         with open(os.path.join(out, "config.json")) as f:
@@ -115,8 +118,10 @@ def finished(out, dataset, sets):
         return False
     record = config.pop("dataset", {})
     same_data = os.path.realpath(record.get("path", "")) == os.path.realpath(dataset)
-    return os.path.isfile(os.path.join(out, "metrics.json")) and same_data and \
-        config == FitConfig.from_sources(None, sets).to_dict()
+    expected = FitConfig.from_sources(None, sets).to_dict()
+    for key in ignore:
+        config.pop(key, None), expected.pop(key, None)
+    return os.path.isfile(os.path.join(out, "metrics.json")) and same_data and config == expected
 
 
 def folder_bytes(path):
@@ -125,6 +130,10 @@ def folder_bytes(path):
 
 def time_to_within(curve, best, tolerance=0.5):
     return next((t for t, p in curve if p >= best - tolerance), None)
+
+
+# settings of the background phase alone: the removal section's strategies refit it from the full field
+BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter")
 
 
 def make_data(scene, out, log_dir, quick):
@@ -140,7 +149,7 @@ def make_data(scene, out, log_dir, quick):
 
 
 # ------------------------------------------------------------------------------------ 4. removal
-STRATEGIES = ["lift", "clear", "harmonic"]  # bg_strategy values compared from one fitted full field
+STRATEGIES = ["lift", "clear", "harmonic", "guided"]  # bg_strategy values compared from one fitted full field
 
 
 def ground_truth_fits(work, scenes, results):

@@ -1,6 +1,6 @@
 """Removal by background strategy, from one fitted full field (the benchmark's removal section).
 
-    python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET]
+    python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET] [--set KEY=VALUE ...]
 
 RUN: a finished fit kept with ``--keep-checkpoints``; its final state's full field is reused, the
 background is fitted again with ``bg_strategy=STRATEGY`` (every other setting as RUN's config.json), and
@@ -10,7 +10,8 @@ the masks and outside them (beside the full field's outside them), the object's 
 foreground coverage IoU and the view-to-view consistency; OpenCV's Telea and Navier-Stokes on each
 held-out view itself (they see the photo around the mask) beside them. MASKED_DATASET: fit the
 background with that copy of RUN's dataset (other object masks, e.g. from scripts/make_masks.py);
-scores still use RUN's dataset and its ground-truth masks.
+scores still use RUN's dataset and its ground-truth masks. ``--set``: settings over RUN's (as
+``scripts/train.py --set``).
 """
 import json
 import os
@@ -19,7 +20,7 @@ import time
 
 import numpy as np
 
-PREVIEWS = 4  # held-out views previewed when the dataset has no ground truth to score
+PREVIEWS = 4  # held-out views previewed when the dataset has neither ground truth nor masks to score
 
 
 def evaluate(ds, integrator, dilation_fraction):
@@ -29,7 +30,9 @@ def evaluate(ds, integrator, dilation_fraction):
     from ..render.views import render_camera
     from ..tasks.removal import consistency
     dil = int(np.ceil(dilation_fraction * np.hypot(*ds.size)))
-    tests = [v for v in ds.test if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all()]
+    scored = [v for v in ds.test if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all()]
+    # without ground truth: the consistency alone, on every held-out view (none without masks either)
+    tests = scored or (list(ds.test) if ds.masks is not None else [])
     renders = {v: render_camera(integrator, ds.cameras[v], ("full", "bg", "fg")) for v in tests}
     images = {"volume": {v: np.clip(renders[v]["bg"][0], 0, 1) for v in tests},
               "telea": {v: opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "telea") for v in tests},
@@ -38,7 +41,7 @@ def evaluate(ds, integrator, dilation_fraction):
     rows = {}
     for name, by_view in images.items():
         r = {"psnr_mask": [], "psnr_outside": [], "residue": []}
-        for v in tests:
+        for v in scored:
             region, gt = dilate(ds.masks[v], dil), ds.backgrounds[v]
             r["psnr_mask"].append(psnr(by_view[v], gt, region))
             r["psnr_outside"].append(psnr(by_view[v], gt, ~region))
@@ -46,16 +49,18 @@ def evaluate(ds, integrator, dilation_fraction):
         rows[name] = {k: float(np.nanmean(x)) if x else None for k, x in r.items()}
         rows[name]["consistency_psnr"] = consistency(ds, tests, by_view, depth, dil)
     full_out = [psnr(np.clip(renders[v]["full"][0], 0, 1), ds.backgrounds[v], ~dilate(ds.masks[v], dil))
-                for v in tests]
+                for v in scored]
     rows["volume"]["full_psnr_outside"] = float(np.mean(full_out)) if full_out else None
     truth = {v: ds.coverage[v] > 0.5 if ds.coverage is not None else ds.masks[v] for v in tests}
     rows["volume"]["fg_coverage_iou"] = float(np.mean([iou(renders[v]["fg_coverage"] > 0.5, truth[v])
-                                                       for v in tests])) if tests else None
+                                                       for v in scored])) if scored else None
     return rows, renders
 
 
 def main(argv=None):
-    argv = argv or sys.argv[1:]
+    argv = list(argv or sys.argv[1:])
+    sets = [argv[k + 1] for k, a in enumerate(argv) if a == "--set" and k + 1 < len(argv)]
+    argv = [a for k, a in enumerate(argv) if a != "--set" and (k == 0 or argv[k - 1] != "--set")]
     run, strategy, out = argv[:3]
     from ..data import load_dataset
     from ..fit.config import FitConfig
@@ -67,7 +72,7 @@ def main(argv=None):
     from ..optim.adam import Adam
     with open(os.path.join(run, "config.json")) as f:
         record = json.load(f)["dataset"]
-    cfg = FitConfig.from_sources(os.path.join(run, "config.json"), [f'bg_strategy="{strategy}"'])
+    cfg = FitConfig.from_sources(os.path.join(run, "config.json"), [f'bg_strategy="{strategy}"'] + sets)
     ds = load_dataset(record["path"], record["format"], record["holdout"])
     fit_ds = load_dataset(argv[3], record["format"], record["holdout"]) if len(argv) > 3 else ds
     os.makedirs(out, exist_ok=True)
@@ -86,7 +91,7 @@ def main(argv=None):
     os.remove(checkpoint)
     integrator = fit_integrator(inputs, state)
     rows, renders = evaluate(ds, integrator, cfg.hull_dilation)
-    if not renders:  # no ground truth: previews of the first held-out views all the same
+    if not renders:  # nothing to score: previews of the first held-out views all the same
         from ..render.views import render_camera
         renders = {v: render_camera(integrator, ds.cameras[v], ("bg",)) for v in list(ds.test)[:PREVIEWS]}
     for v, layers in renders.items():

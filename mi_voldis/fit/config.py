@@ -131,14 +131,20 @@ class FitConfig(Settings):
                                              "lower", low=0, high=1)
 
     # ---- background
-    bg_strategy: str = setting("harmonic", "'lift': from the full field, hull emptied and refitted, what no view "
+    bg_strategy: str = setting("guided", "'lift': from the full field, hull emptied and refitted, what no view "
                                        "sees lifted from a 2D inpainting; 'clear': the same without the lifted "
-                                       "prior; 'harmonic': hull inpainted harmonically, then refitted; 'scratch': "
-                                       "both fields jointly", choices=("lift", "clear", "harmonic", "scratch"))
+                                       "prior; 'harmonic': hull inpainted harmonically, then refitted; 'guided': "
+                                       "'harmonic' refitted with each view's 2D inpainting as a weak prior on its "
+                                       "masked rays; 'scratch': both fields jointly",
+                                 choices=("lift", "clear", "harmonic", "guided", "scratch"))
+    prior_weight: float = setting(0.1, "lambda of the 2D colour prior on masked rays, against 1 for L_bg "
+                                       "(bg_strategy 'guided')", low=0)
+    prior_rays: float = setting(0.25, "rays of that prior per step, fraction of batch_rays", above=0, high=1)
     prior_views: int = setting(4, "reference views inpainted and lifted in turn, each where the background "
                                   "still has a hole (bg_strategy 'lift')", low=1)
-    prior_inpainter: str = setting("membrane", "2D inpainter of the reference view: 'telea' or 'ns' (OpenCV), "
-                                                 "'membrane' (harmonic)", choices=("telea", "ns", "membrane"))
+    prior_inpainter: str = setting("telea", "2D inpainter of the prior's views ('guided': every masked view, "
+                                              "'lift': the reference views): 'telea' or 'ns' (OpenCV), "
+                                              "'membrane' (harmonic)", choices=("telea", "ns", "membrane"))
     hull_dilation: float = setting(0.03, "mask dilation for the visual hull, fraction of image diagonal",
                                    low=0, high=1)
     hull_min_views: float = setting(0.9, "a cell is in the hull if inside the dilated mask in this fraction of "
@@ -146,7 +152,7 @@ class FitConfig(Settings):
     bg_ray_dilation: float = setting(0.15, "refit rays come from masks dilated by this fraction of the "
                                            "diagonal", low=0, high=1)
     object_alpha: float = setting(0.5, "hull voxels this opaque in the full field are the object: emptied "
-                                       "in bg (bg_strategy 'harmonic')", above=0, high=1)
+                                       "in bg (bg_strategy 'harmonic', 'guided')", above=0, high=1)
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)

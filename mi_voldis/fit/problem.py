@@ -35,9 +35,10 @@ class FieldFit:
     vertex) when given; ``schedule``: follow the resolution schedule and start empty-space skipping."""
 
     def __init__(self, inputs, state, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
-                 rates=None, fit_exposure=False):
+                 rates=None, fit_exposure=False, prior=None):
         self.inputs, self.state, self.roles, self.layers, self.bank = inputs, state, roles, layers, bank
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
+        self.prior = prior  # (RayBank, pool): the guided background's 2D colour prior (mi_voldis.fit.guide)
         self.fit_exposure = fit_exposure and state.exposure is not None
         self.adam = state.adam if adam is None else adam
         cfg = inputs.cfg
@@ -116,20 +117,28 @@ class FieldFit:
         for layer in distortion:
             loss += (cfg.distortion / extent) * dr.mean(out["distortion"][layer])
 
-        def photo(layer):  # what the photograph shows: the layer over the backdrop, colour-corrected
-            pred = out[layer][0] + (1.0 - out[layer][1]) * behind
+        def photo(rgba, behind, view):  # what the photograph shows: the layer over the backdrop, colour-corrected
+            pred = rgba[0] + (1.0 - rgba[1]) * behind
             if self.state.exposure is None:
                 return pred
             params = self.params["exposure"] if self.fit_exposure else dr.detach(self.state.exposure)
             return exposure.apply(params, view, pred)
         if "full" in self.layers:
-            err = full_loss(photo("full"), color)
+            err = full_loss(photo(out["full"], behind, view), color)
             loss += err
             stats["psnr"] = psnr_of(err)
         if "bg" in self.layers:
-            err = background_loss(photo("bg"), color, mask)
+            err = background_loss(photo(out["bg"], behind, view), color, mask)
             loss += err
             stats["psnr_bg"] = psnr_of(err)
+        if self.prior is not None and cfg.prior_weight > 0:  # L_prior on masked rays (mi_voldis.fit.guide)
+            bank, pool = self.prior
+            m = max(1, int(cfg.prior_rays * n))
+            o, d, target, _, prior_view = bank.batch(rng, m, pool, cfg.batch_tile)
+            prior = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(m, np.float32)), ("bg",))
+            err = full_loss(photo(prior["bg"], backdrop(self.inputs.ds, rng, m), prior_view), target)
+            loss += cfg.prior_weight * err
+            stats["psnr_prior"] = psnr_of(err)
         if self.fit_exposure:
             loss += exposure.penalty(self.params["exposure"], cfg.exposure_weight)
         return loss, stats

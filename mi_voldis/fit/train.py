@@ -8,11 +8,15 @@ reverse-mode AD, with Adam on raw voxel grids.
 
 Phases (``bg_strategy``):
 
-* ``harmonic`` (default): fit the full field; the background starts as a copy of it with the object's
+* ``harmonic``: fit the full field; the background starts as a copy of it with the object's
   visual hull (from the masks) filled with the harmonic extension of the field around it, the
   object's own dense voxels emptied (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull
   cells are refitted with L_bg on rays near the masks. Outside the hull the two fields are identical,
   so the foreground w_full - w_bg is exactly zero there.
+* ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
+  training view (each view's photo inpainted in its mask, occluders in front of the object left out of
+  the inpainting's sources; weight ``prior_weight`` against 1 for L_bg, :mod:`mi_voldis.fit.guide`):
+  what no view sees becomes the views' consensus instead of the harmonic fill's blend.
 * ``lift``: the same full field; the background starts as a copy of it with the object's
   visual hull (from the masks) emptied, only hull cells are refitted with L_bg on rays near the masks
   (what other views see), and what no view sees is filled from a reference view's 2D inpainting
@@ -45,6 +49,7 @@ from .background import (
     start_harmonic,
 )
 from .fields import FitInputs, init_fields
+from .guide import colour_prior
 from .lift import keys_mask, lift_prior
 from .problem import FieldFit
 from .schedule import (
@@ -95,7 +100,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
 
     if state.phase == "bg" and has_masks and not scratch:
         t0 = time.perf_counter()
-        harmonic = cfg.bg_strategy == "harmonic"
+        harmonic = cfg.bg_strategy in ("harmonic", "guided")
         if "bg" not in state.fields or state.hull_points is None:
             if harmonic:
                 start_harmonic(inputs, state)
@@ -113,8 +118,9 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         else:  # on the background's lattice (the lifted prior may have allocated bricks)
             free = cleared_region(inputs, state)
         pool = background_ray_pool(dataset, inputs.bank, cfg.bg_ray_dilation)
+        prior = colour_prior(inputs, state, inpainter or cfg.prior_inpainter) if cfg.bg_strategy == "guided" else None
         problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
-                           schedule=False)
+                           schedule=False, prior=prior)
         optimize(problem, state.adam, steps=cfg.steps_bg, start=state.step, final_ratio=cfg.lr_final_ratio,
                  log=state.log, desc="bg refit", checkpoint=checkpoint_at("bg")(problem),
                  checkpoint_every=cfg.checkpoint_every, progress=progress)
