@@ -111,6 +111,34 @@ def test_visibility_of_a_plane_behind_an_occluder_from_two_cameras():
     np.testing.assert_array_equal(seen[clear], expected[clear])
 
 
+def test_held_out_pixels_split_by_what_training_views_see():
+    """The benchmark's split of a held-out view's masked pixels: the plane behind the sphere in camera A
+    counts as seen exactly where camera B sees it unmasked; pixels without depth or outside the region
+    never do."""
+    from types import SimpleNamespace
+
+    from mi_voldis.bench.visible import seen_pixels
+    centre, radius = np.array([0.0, -0.1, 0.0]), 0.3
+    cams = [Camera(look_at(p, [0.0, FLOOR_Y, 0.0]), 55.0, 80, 60) for p in ([0.0, 1.2, 2.0], [1.6, 1.0, 1.2])]
+    depths, masks = [], []
+    for cam in cams:
+        py, px = np.mgrid[0:cam.height, 0:cam.width]
+        o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
+        ts = sphere_hit(o, d, centre, radius).reshape(cam.height, cam.width)
+        masks.append(ts < plane_depth(cam))
+        depths.append(np.minimum(ts, plane_depth(cam)))
+    ds = SimpleNamespace(cameras=cams, masks=masks)
+    behind = plane_depth(cams[0])
+    behind[:10] = np.nan  # no background depth there
+    got = seen_pixels(ds, 0, masks[0], behind, {1: depths[1]})
+    pixels = np.flatnonzero(masks[0] & np.isfinite(behind))
+    o, d = pixel_rays(cams[0], *(np.divmod(pixels, cams[0].width)[::-1] + np.array(0.5)))
+    expected = seen_elsewhere(o + behind.reshape(-1)[pixels, None] * d, [cams[1]], [depths[1]], [masks[1]])
+    assert expected.any() and (~expected).any()
+    np.testing.assert_array_equal(got.reshape(-1)[pixels], expected)
+    assert not got[~masks[0]].any() and not got[:10].any()
+
+
 def empty_world_field(resolution=40):
     lo, hi = np.array([-1.0, -1.0, -1.0]), np.array([1.0, 1.0, 1.0])
     voxel = 2.0 / (resolution - 1)

@@ -132,7 +132,8 @@ def time_to_within(curve, best, tolerance=0.5):
     return next((t for t, p in curve if p >= best - tolerance), None)
 
 
-# settings of the background phase alone: the removal section's strategies refit it from the full field
+# settings of the background phase alone (bg_strategy first): the removal section's strategies refit it
+# from the full field with today's defaults
 BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter")
 
 
@@ -176,33 +177,57 @@ def save_results(results, report_dir, name):
     return results
 
 
+CAPTURE_STRATEGIES = ["harmonic", "guided"]  # on captures without ground truth: the default before and after
+REMOVAL_CAPTURES = ["statue"]  # captures with object masks (../shared/data; skipped when absent)
+
+
 def run_removal(work, report_dir, scenes=None):
     """Removal by background strategy on every ground-truth scene (bundled and random), each from the
-    default command's full field (:mod:`mi_voldis.bench.strategies`); previews copied to ``report_dir``."""
+    default command's full field (:mod:`mi_voldis.bench.strategies`), and on the captures with masks
+    (consistency and previews of every held-out view); previews copied to ``report_dir``."""
     results = new_results()
     for scene, _, run, logs in ground_truth_fits(work, scenes, results):
-        rows = {}
-        for strategy in STRATEGIES:
-            out = os.path.join(work, "removal", scene, strategy)
-            args = ["-m", "mi_voldis.bench.strategies", run["out"], strategy, out]
-            wall = child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
-            with open(os.path.join(out, "metrics.json")) as f:
-                rows[strategy] = {**json.load(f), "wall_seconds": wall, "out": out,
-                                  "command": "python " + " ".join(args)}
-        run.pop("curve", None)
-        results["scenes"][scene] = {"fit": run, "strategies": rows}
+        results["scenes"][scene] = {"fit": run, "strategies": strategy_rows(work, scene, run, STRATEGIES, logs)}
+    t0, logs = time.perf_counter(), os.path.join(work, "logs")
+    results["captures"] = {}
+    for capture in [c for c in REMOVAL_CAPTURES if not scenes or c in scenes]:
+        path = os.path.join(SHARED, capture)
+        if not os.path.isdir(path):
+            continue
+        run = fit(path, os.path.join(work, "runs", f"{capture}_0"), [], logs, keep=True)
+        results["captures"][capture] = {"fit": run,
+                                        "strategies": strategy_rows(work, capture, run, CAPTURE_STRATEGIES, logs)}
+    results["seconds"] = results.get("seconds", 0.0) + time.perf_counter() - t0
     return save_results(results, report_dir, "removal.json")
+
+
+def strategy_rows(work, scene, run, strategies, logs):
+    """Each of ``strategies`` refitted from ``run``'s full field: its metrics, wall seconds and command."""
+    from ..fit.config import FitConfig
+    defaults = FitConfig().to_dict()  # the background's settings as today's defaults, whatever the run recorded
+    sets = [a for key in BACKGROUND_SETTINGS[1:] for a in ("--set", f"{key}={json.dumps(defaults[key])}")]
+    rows = {}
+    for strategy in strategies:
+        out = os.path.join(work, "removal", scene, strategy)
+        args = ["-m", "mi_voldis.bench.strategies", run["out"], strategy, out] + sets
+        wall = child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
+        with open(os.path.join(out, "metrics.json")) as f:
+            rows[strategy] = {**json.load(f), "wall_seconds": wall, "out": out, "command": "python " + " ".join(args)}
+    run.pop("curve", None)
+    return rows
 
 
 def run_masks(work, report_dir, scenes=None):
     """Masks from two views on every ground-truth scene (:mod:`mi_voldis.bench.masks`), from the removal
     section's fits (made here when missing), beside the removal with every ground-truth mask."""
+    from ..fit.config import FitConfig
     results = new_results()
     for scene, data, run, logs in ground_truth_fits(work, scenes, results):
-        base = os.path.join(work, "removal", scene, "harmonic")
+        default = FitConfig().bg_strategy  # the made masks' removal uses it too (mi_voldis.bench.masks)
+        base = os.path.join(work, "removal", scene, default)
         if not os.path.isfile(os.path.join(base, "metrics.json")):
-            child(["-m", "mi_voldis.bench.strategies", run["out"], "harmonic", base],
-                  os.path.join(logs, f"removal_{scene}_harmonic.log"))
+            child(["-m", "mi_voldis.bench.strategies", run["out"], default, base],
+                  os.path.join(logs, f"removal_{scene}_{default}.log"))
         out = os.path.join(work, "masks", scene)
         shutil.rmtree(out, ignore_errors=True)
         args = ["-m", "mi_voldis.bench.masks", run["out"], out]

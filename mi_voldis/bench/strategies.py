@@ -6,8 +6,9 @@ RUN: a finished fit kept with ``--keep-checkpoints``; its final state's full fie
 background is fitted again with ``bg_strategy=STRATEGY`` (every other setting as RUN's config.json), and
 OUT receives ``metrics.json`` and the background of each held-out view as PNG. Scored on the held-out
 views against the ground-truth background (in-mask = masks dilated by ``hull_dilation``): PSNR inside
-the masks and outside them (beside the full field's outside them), the object's residue, the
-foreground coverage IoU and the view-to-view consistency; OpenCV's Telea and Navier-Stokes on each
+the masks (and there, apart, where some training view sees the background unmasked and where none
+does: :mod:`mi_voldis.bench.visible`) and outside them (beside the full field's outside them), the
+object's residue, the foreground coverage IoU and the view-to-view consistency; OpenCV's Telea and Navier-Stokes on each
 held-out view itself (they see the photo around the mask) beside them. MASKED_DATASET: fit the
 background with that copy of RUN's dataset (other object masks, e.g. from scripts/make_masks.py);
 scores still use RUN's dataset and its ground-truth masks. ``--set``: settings over RUN's (as
@@ -29,6 +30,7 @@ def evaluate(ds, integrator, dilation_fraction):
     from ..metrics import dilate, iou, object_residue, psnr
     from ..render.views import render_camera
     from ..tasks.removal import consistency
+    from .visible import seen_pixels, training_surfaces
     dil = int(np.ceil(dilation_fraction * np.hypot(*ds.size)))
     scored = [v for v in ds.test if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all()]
     # without ground truth: the consistency alone, on every held-out view (none without masks either)
@@ -38,12 +40,17 @@ def evaluate(ds, integrator, dilation_fraction):
               "telea": {v: opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "telea") for v in tests},
               "ns": {v: opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "ns") for v in tests}}
     depth = {v: renders[v]["bg"][2] for v in tests}
+    # the masked pixels whose background (at the volume's depth) some training view sees unmasked
+    surfaces = training_surfaces(ds, integrator) if scored else {}
+    seen = {v: seen_pixels(ds, v, dilate(ds.masks[v], dil), depth[v], surfaces) for v in scored}
     rows = {}
     for name, by_view in images.items():
-        r = {"psnr_mask": [], "psnr_outside": [], "residue": []}
+        r = {"psnr_mask": [], "psnr_outside": [], "residue": [], "psnr_seen": [], "psnr_unseen": []}
         for v in scored:
             region, gt = dilate(ds.masks[v], dil), ds.backgrounds[v]
             r["psnr_mask"].append(psnr(by_view[v], gt, region))
+            for key, part in (("psnr_seen", seen[v]), ("psnr_unseen", region & ~seen[v])):
+                r[key].append(psnr(by_view[v], gt, part) if part.any() else np.nan)
             r["psnr_outside"].append(psnr(by_view[v], gt, ~region))
             r["residue"].append(object_residue(by_view[v], ds.images[v], gt, ds.masks[v]))
         rows[name] = {k: float(np.nanmean(x)) if x else None for k, x in r.items()}
@@ -51,6 +58,8 @@ def evaluate(ds, integrator, dilation_fraction):
     full_out = [psnr(np.clip(renders[v]["full"][0], 0, 1), ds.backgrounds[v], ~dilate(ds.masks[v], dil))
                 for v in scored]
     rows["volume"]["full_psnr_outside"] = float(np.mean(full_out)) if full_out else None
+    rows["volume"]["seen_share"] = float(np.mean([seen[v].sum() / max(dilate(ds.masks[v], dil).sum(), 1)
+                                                  for v in scored])) if scored else None
     truth = {v: ds.coverage[v] > 0.5 if ds.coverage is not None else ds.masks[v] for v in tests}
     rows["volume"]["fg_coverage_iou"] = float(np.mean([iou(renders[v]["fg_coverage"] > 0.5, truth[v])
                                                        for v in scored])) if scored else None
