@@ -206,16 +206,17 @@ def write_removal(results, report_dir, command):
     md = _section_header("Removal by background strategy", results, command) + [
           "Each scene is fitted once with the default command (`scripts/train.py DATA --out RUN "
           "--keep-checkpoints`, no setting); from its full field the background is fitted again with each "
-          "`bg_strategy` (`python -m mi_voldis.bench.strategies RUN STRATEGY OUT`, every other setting as "
-          "the run's). Scores on the held-out views against the ground-truth background: PSNR inside the "
-          "masks (dilated by 3% of the diagonal) and outside them (the full field's outside them beside it), "
+          "`bg_strategy` (`python -m mi_voldis.bench.strategies RUN STRATEGY OUT --set ...`, every other "
+          "setting as the run's, the background's as today's defaults). Scores on the held-out views against "
+          "the ground-truth background: PSNR inside the masks (dilated by 3% of the diagonal) and outside "
+          "them (the full field's outside them beside it), "
           "the object's residue (share of its pixels closer to its own colour than to the true background; "
           "lower is better), view-to-view consistency (each view's result warped into its nearest held-out "
           "neighbour with the background's depth, PSNR there inside the mask), the foreground coverage IoU "
           "(sum max(w_fg, 0) > 0.5 against the exact coverage), and the seconds of the background phase. "
-          "Seen / unseen: the in-mask PSNR apart where some training view sees the background unmasked (at "
-          "the default background's depth, `mi_voldis/bench/visible.py`: what the masked loss can "
-          "reconstruct) and where none does (what only a prior can fill), at each strategy's own depth (the OpenCV "
+          "Seen / unseen: the in-mask PSNR apart where some training view sees the background unmasked "
+          "(`mi_voldis/bench/visible.py`: what the masked loss can reconstruct) and where none does (what "
+          "only a prior can fill), the background's point taken at each strategy's own depth (the OpenCV "
           "rows: on the last strategy's pixels). "
           "Telea / Navier-Stokes: OpenCV on each held-out view itself (they see the photo around the mask).",
           ""] + _removal_targets(results)
@@ -307,6 +308,9 @@ def _removal_targets(results):
     return md
 
 
+SHEET_WIDTH = 1600  # pixels across a removal sheet at most
+
+
 def _removal_sheet(run, strategies, path, views=3):
     """One PNG: for the first ``views`` held-out views (None: all; columns), the photo, the ground-truth
     background (when the dataset has one), OpenCV Telea's inpainting and each strategy's background
@@ -335,7 +339,13 @@ def _removal_sheet(run, strategies, path, views=3):
     rows.append([display_to_uint8(opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "telea")) for v in tests])
     rows += [[iio.imread(os.path.join(r["out"], f"view{v:03d}_bg.png"))[..., :3] for v in tests]
              for r in strategies.values()]
-    write_png(path, contact_sheet([im for row in rows for im in row], columns=len(tests)))
+    images = [im for row in rows for im in row]
+    factor = -(-len(tests) * ds.size[1] // SHEET_WIDTH)  # whole views, at most SHEET_WIDTH pixels across
+    if factor > 1:
+        import cv2
+        images = [cv2.resize(im, (im.shape[1] // factor, im.shape[0] // factor), interpolation=cv2.INTER_AREA)
+                  for im in images]
+    write_png(path, contact_sheet(images, columns=len(tests)))
     return os.path.basename(path)
 
 
