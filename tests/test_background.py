@@ -349,6 +349,8 @@ def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only
         painted = inpainter("telea")(ds.images[v], expected[k])  # no occluder in this scene
         np.testing.assert_allclose(colours[k][expected[k]], painted[expected[k]], atol=1e-6)
         np.testing.assert_allclose(colours[k][~expected[k]], ds.images[v][~expected[k]], atol=0.51 / 255)  # 8-bit
+    flat = colour_prior(inputs, state, lambda image, hole: np.where(hole[..., None], 0.25, image))[0]  # any callable
+    np.testing.assert_allclose(np.array(flat.colors).reshape(-1, 3)[pool], 0.25)
     for v in ds.test:
         out = ~dilate(ds.masks[v], int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size))) + 2)
         assert np.abs(renders["guided"][v][out] - renders["harmonic"][v][out]).max() < 5e-3

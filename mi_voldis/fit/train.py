@@ -69,8 +69,8 @@ from .state import FitState
 
 def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     """Fit ``dataset``, checkpointing to the file ``checkpoint``. Returns the inputs and the final
-    :class:`FitState` (fields, log, phase times). ``inpainter``: a 2D inpainter callable for the ``lift``
-    prior (:mod:`mi_voldis.inpaint2d`), instead of the one ``cfg.prior_inpainter`` names."""
+    :class:`FitState` (fields, log, phase times). ``inpainter``: a 2D inpainter callable for the ``guided``
+    and ``lift`` priors (:mod:`mi_voldis.inpaint2d`), instead of the one ``cfg.prior_inpainter`` names."""
     inputs = FitInputs.of(dataset, cfg, checkpoint, progress)
     adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
     state = FitState.load(checkpoint, adam) if resume else None
