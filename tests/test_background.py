@@ -79,9 +79,9 @@ def test_inpainters_are_named_or_callable():
         inpainter("lama")
 
 
-def test_visibility_of_a_plane_behind_an_occluder_from_two_cameras():
-    """Plane y = -0.5, a sphere above it; the plane points behind the sphere in camera A are seen from
-    camera B exactly where B's own view of them is not blocked by the sphere."""
+def sphere_over_plane_from_two_cameras():
+    """A sphere above the plane y = FLOOR_Y seen by two cameras: its centre and radius, the cameras, and
+    per camera the exact depth (distance along each pixel-centre ray) and the sphere's mask."""
     centre, radius = np.array([0.0, -0.1, 0.0]), 0.3
     cams = [Camera(look_at(p, [0.0, FLOOR_Y, 0.0]), 55.0, 80, 60) for p in ([0.0, 1.2, 2.0], [1.6, 1.0, 1.2])]
     depths, masks = [], []
@@ -89,9 +89,15 @@ def test_visibility_of_a_plane_behind_an_occluder_from_two_cameras():
         py, px = np.mgrid[0:cam.height, 0:cam.width]
         o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
         ts = sphere_hit(o, d, centre, radius).reshape(cam.height, cam.width)
-        tp = plane_depth(cam)
-        masks.append(ts < tp)
-        depths.append(np.minimum(ts, tp))
+        masks.append(ts < plane_depth(cam))
+        depths.append(np.minimum(ts, plane_depth(cam)))
+    return centre, radius, cams, depths, masks
+
+
+def test_visibility_of_a_plane_behind_an_occluder_from_two_cameras():
+    """Plane y = -0.5, a sphere above it; the plane points behind the sphere in camera A are seen from
+    camera B exactly where B's own view of them is not blocked by the sphere."""
+    centre, radius, cams, depths, masks = sphere_over_plane_from_two_cameras()
     a, b = cams
     pixels = np.flatnonzero(masks[0])
     assert len(pixels) > 100
@@ -118,15 +124,7 @@ def test_held_out_pixels_split_by_what_training_views_see():
     from types import SimpleNamespace
 
     from mi_voldis.bench.visible import seen_pixels
-    centre, radius = np.array([0.0, -0.1, 0.0]), 0.3
-    cams = [Camera(look_at(p, [0.0, FLOOR_Y, 0.0]), 55.0, 80, 60) for p in ([0.0, 1.2, 2.0], [1.6, 1.0, 1.2])]
-    depths, masks = [], []
-    for cam in cams:
-        py, px = np.mgrid[0:cam.height, 0:cam.width]
-        o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
-        ts = sphere_hit(o, d, centre, radius).reshape(cam.height, cam.width)
-        masks.append(ts < plane_depth(cam))
-        depths.append(np.minimum(ts, plane_depth(cam)))
+    centre, radius, cams, depths, masks = sphere_over_plane_from_two_cameras()
     ds = SimpleNamespace(cameras=cams, masks=masks)
     behind = plane_depth(cams[0])
     behind[:10] = np.nan  # no background depth there
