@@ -79,6 +79,28 @@ def test_inpainters_are_named_or_callable():
         inpainter("lama")
 
 
+def test_fsr_continues_stripes_that_telea_smears():
+    """Vertical stripes (period 8 px) with a 12 x 12 hole: OpenCV contrib's frequency-selective
+    reconstruction carries the stripes through (under a third of Telea's error there), the known pixels
+    stay as they were."""
+    x = np.arange(48)
+    stripes = np.where((x // 4) % 2 == 0, 0.8, 0.2)
+    image = np.repeat(np.broadcast_to(stripes, (40, 48))[..., None], 3, -1).astype(np.float32)
+    hole = np.zeros((40, 48), bool)
+    hole[14:26, 18:30] = True
+    fsr, telea = inpainter("fsr")(image, hole), inpainter("telea")(image, hole)
+    error = {name: np.abs(out[hole] - image[hole]).mean() for name, out in (("fsr", fsr), ("telea", telea))}
+    assert error["fsr"] < error["telea"] / 3, error
+    np.testing.assert_allclose(fsr[~hole], image[~hole], atol=1 / 255 + 1e-6)
+
+
+def test_fsr_without_the_contrib_modules_says_what_to_install(monkeypatch):
+    import cv2
+    monkeypatch.delattr(cv2, "xphoto")
+    with pytest.raises(RuntimeError, match="opencv-contrib-python-headless"):
+        inpainter("fsr")(np.zeros((8, 8, 3), np.float32), np.ones((8, 8), bool))
+
+
 def sphere_over_plane_from_two_cameras():
     """A sphere above the plane y = FLOOR_Y seen by two cameras: its centre and radius, the cameras, and
     per camera the exact depth (distance along each pixel-centre ray) and the sphere's mask."""
@@ -274,6 +296,41 @@ def test_removal_leaves_nothing_of_the_object(strategy, tmp_path):
     if strategy == "lift":
         assert set(state.prior["reference_views"]) <= set(ds.train.tolist())
         assert state.prior["vertices_written"] > 0
+
+
+def test_the_objects_cells_are_the_dense_hull_cells_no_view_sees_unmasked(tmp_path):
+    """On the sphere standing on the floor, with ``object_alpha`` low enough to take in a soft edge: the
+    object's cells hold the sphere's inside and, of the floor's surface cells inside the hull, exactly
+    those that no training view sees unmasked (analytically: outside the view's mask grown by a pixel,
+    the ray to the cell not through the sphere), though all are opaque; the sphere's haze is no part.
+    The full field's median depth decides what a view sees: the haze in front of the floor beside the
+    sphere does not hide it."""
+    from mi_voldis.fit.background import background_regions
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
+    assert cfg.object_alpha <= 0.2
+    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, 0.9, 0.99), fields={"full": full})
+    inputs = FitInputs.of(ds, cfg, str(tmp_path / "state.npz"), False)
+    hull, _, obj = background_regions(inputs, state)
+    hull, obj = np.array(hull) > 0, np.array(obj)
+    pts, real = vertex_positions(full)
+    voxel = 2.0 / 39
+    centre = np.array([0.0, FLOOR_Y + 0.3, 0.0])
+    r = np.linalg.norm(pts - centre, axis=1)
+    seen = np.zeros(len(pts), bool)
+    for v in ds.masked_train:
+        cam = ds.cameras[v]
+        px, py, z = project(cam, pts)
+        ix, iy = np.floor(px).astype(int), np.floor(py).astype(int)
+        ok = (z > 0) & (ix >= 0) & (ix < cam.width) & (iy >= 0) & (iy < cam.height)
+        ok[ok] &= ~dilate(ds.masks[v], 1)[iy[ok], ix[ok]]
+        o = np.broadcast_to(cam.to_world[:3, 3], pts.shape)
+        dist = np.linalg.norm(pts - o, axis=1)
+        seen |= ok & ~(sphere_hit(o, (pts - o) / dist[:, None], centre, 0.3) < dist - voxel)
+    surface = real & hull & (pts[:, 1] > FLOOR_Y + 0.5 * voxel) & (pts[:, 1] < FLOOR_Y + 1.5 * voxel)
+    assert (surface & seen).sum() > 50 and (surface & ~seen).sum() > 50
+    np.testing.assert_array_equal(obj[surface], ~seen[surface])
+    assert obj[real & (r < 0.3 - voxel)].all()
+    assert not obj[real & (r > 0.3 + 0.5 * voxel) & (pts[:, 1] > FLOOR_Y + 2 * voxel)].any()
 
 
 def test_the_inpainting_hole_takes_in_occluders_in_front_of_the_object_only():

@@ -34,7 +34,7 @@ def falling(log):
 def test_removal_is_the_background(tiny_run):
     out = run_task(tiny_run, "removal", progress=False)
     m = metrics(out)
-    assert set(m["methods"]) == {"volume", "telea", "ns"}
+    assert set(m["methods"]) == {"volume", "telea", "ns", "fsr"}
     run = FittedRun(tiny_run)
     cam = run.dataset.cameras[run.dataset.test[0]]
     removed = render_camera(mi.load_file(os.path.join(out, "scene.xml")).integrator(), cam, ("composite", "bg"))

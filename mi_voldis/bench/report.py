@@ -2,6 +2,7 @@
 import os
 import shutil
 
+from ..inpaint2d import BASELINES
 from . import rays
 from .machine import BYTES_FORWARD, BYTES_TABLE, BYTES_TRAIN
 from .run import msps_bound, time_to_within
@@ -130,9 +131,9 @@ def _accuracy(results, report_dir):
         if "methods" in removal:
             md += ["| removal (in-mask = masks dilated by 3% of the diagonal) | PSNR in mask | SSIM in mask | "
                    "PSNR whole | view consistency PSNR | object residue |", "|---|---|---|---|---|---|"]
-            labels = {"volume": "background volume (ours)", "telea": "OpenCV Telea", "ns": "OpenCV Navier-Stokes"}
+            labels = {"volume": "background volume (ours)", **BASELINES}
             for name, r in removal["methods"].items():
-                label = labels[name]
+                label = labels.get(name, name)
                 md.append(f"| {label} | {_f(r['psnr_mask'], 2)} | {_f(r['ssim_mask'], 3)} | {_f(r['psnr'], 2)} | "
                           f"{_f(r['consistency_psnr'], 2)} | {_f(r.get('residue'), 3)} |")
             md += ["", "Object residue: the share of the object's pixels whose removal is closer to the object's "
@@ -218,7 +219,9 @@ def write_removal(results, report_dir, command):
           "(`mi_voldis/bench/visible.py`: what the masked loss can reconstruct) and where none does (what "
           "only a prior can fill), the background's point taken at each strategy's own depth (the OpenCV "
           "rows: on the last strategy's pixels). "
-          "Telea / Navier-Stokes: OpenCV on each held-out view itself (they see the photo around the mask).",
+          "Telea / Navier-Stokes / FSR (OpenCV contrib's frequency-selective reconstruction): 2D inpainting "
+          "of each held-out view itself (they see the photo around the mask); best 2D = the best of the three "
+          "per scene.",
           ""] + _removal_targets(results)
     for scene, entry in results["scenes"].items():
         fit = entry["fit"]
@@ -235,10 +238,10 @@ def write_removal(results, report_dir, command):
             md.append(f"| {strategy} | {_f(v['psnr_mask'], 2)} | {_split(v)} | {_f(v['psnr_outside'], 2)} "
                       f"({_f(v.get('full_psnr_outside'), 2)}) | {_f(v['residue'], 2)} | "
                       f"{_f(v['consistency_psnr'], 2)} | {_f(v.get('fg_coverage_iou'), 2)} | {row['seconds']:.0f} |")
-        for name in ("telea", "ns"):
+        for name in _baselines(base):
             r = base[name]
-            md.append(f"| OpenCV {name} | {_f(r['psnr_mask'], 2)} | {_split(r)} | {_f(r['psnr_outside'], 2)} | "
-                      f"{_f(r['residue'], 2)} | {_f(r['consistency_psnr'], 2)} | - | - |")
+            md.append(f"| {BASELINES.get(name, name)} | {_f(r['psnr_mask'], 2)} | {_split(r)} | "
+                      f"{_f(r['psnr_outside'], 2)} | {_f(r['residue'], 2)} | {_f(r['consistency_psnr'], 2)} | - | - |")
         prior = entry["strategies"].get("lift", {}).get("prior")
         if prior and prior.get("reference_views"):
             shares = ", ".join("-" if x is None else f"{100 * x:.0f}%" for x in prior["seen_elsewhere"])
@@ -247,7 +250,8 @@ def write_removal(results, report_dir, command):
                        f"{prior['vertices_emptied']} vertices emptied, {prior['vertices_written']} written."]
         sheet = _removal_sheet(fit["out"], entry["strategies"], os.path.join(report_dir, f"removal_{scene}.png"))
         if sheet:
-            md += ["", f"![{scene}]({sheet}) Rows: photo, ground-truth background, OpenCV Telea, then "
+            md += ["", f"![{scene}]({sheet}) Rows: photo, ground-truth background, OpenCV Telea, "
+                       "OpenCV contrib FSR, then "
                        + ", ".join(f"`{s}`" for s in entry["strategies"]) + "; columns: the first held-out views."]
         md.append("")
     for capture, entry in results.get("captures", {}).items():
@@ -261,18 +265,23 @@ def write_removal(results, report_dir, command):
         for strategy, row in entry["strategies"].items():
             base = row["methods"]
             md.append(f"| {strategy} | {_f(base['volume']['consistency_psnr'], 2)} | {row['seconds']:.0f} |")
-        for name in ("telea", "ns"):
-            md.append(f"| OpenCV {name} | {_f(base[name]['consistency_psnr'], 2)} | - |")
+        for name in _baselines(base):
+            md.append(f"| {BASELINES.get(name, name)} | {_f(base[name]['consistency_psnr'], 2)} | - |")
         sheet = _removal_sheet(entry["fit"]["out"], entry["strategies"],
                                os.path.join(report_dir, f"removal_{capture}.png"), views=None)
         if sheet:
-            md += ["", f"![{capture}]({sheet}) Rows: photo, OpenCV Telea, then "
+            md += ["", f"![{capture}]({sheet}) Rows: photo, OpenCV Telea, OpenCV contrib FSR, then "
                        + ", ".join(f"`{s}`" for s in entry["strategies"]) + "; columns: every held-out view."]
         md.append("")
     path = os.path.join(report_dir, "removal.md")
     with open(path, "w") as f:
         f.write("\n".join(md) + "\n")
     return path
+
+
+def _baselines(methods):
+    """The 2D methods of a removal result (every method but the volume), in the order they were scored."""
+    return [name for name in methods if name != "volume"]
 
 
 def _split(row):
@@ -295,8 +304,8 @@ def _removal_targets(results):
             continue
         m = row["methods"]
         v = m["volume"]
-        best = max(m["telea"]["psnr_mask"], m["ns"]["psnr_mask"])
-        best_c = max(m["telea"]["consistency_psnr"], m["ns"]["consistency_psnr"])
+        best = max(m[name]["psnr_mask"] for name in _baselines(m))
+        best_c = max(m[name]["consistency_psnr"] for name in _baselines(m))
         margins.append(v["psnr_mask"] - best)
         md.append(f"| {scene} | {_f(v['psnr_mask'], 2)} | {_f(best, 2)} | {v['psnr_mask'] - best:+.2f} | "
                   f"{_f(v['consistency_psnr'], 2)} | {_f(best_c, 2)} | {v['consistency_psnr'] - best_c:+.2f} | "
@@ -313,7 +322,7 @@ SHEET_WIDTH = 1600  # pixels across a removal sheet at most
 
 def _removal_sheet(run, strategies, path, views=3):
     """One PNG: for the first ``views`` held-out views (None: all; columns), the photo, the ground-truth
-    background (when the dataset has one), OpenCV Telea's inpainting and each strategy's background
+    background (when the dataset has one), OpenCV's Telea and contrib FSR inpaintings and each strategy's background
     (rows). Returns its file name, or None."""
     import json
 
@@ -321,7 +330,7 @@ def _removal_sheet(run, strategies, path, views=3):
     import numpy as np
 
     from ..data import load_dataset
-    from ..inpaint2d import opencv_inpaint
+    from ..inpaint2d import inpainter
     from ..io.images import contact_sheet, display_to_uint8, write_png
     from ..metrics import dilate
     with open(os.path.join(run, "config.json")) as f:
@@ -336,7 +345,8 @@ def _removal_sheet(run, strategies, path, views=3):
     rows = [[display_to_uint8(ds.images[v]) for v in tests]]
     if ds.backgrounds is not None:
         rows.append([display_to_uint8(ds.backgrounds[v]) for v in tests])
-    rows.append([display_to_uint8(opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "telea")) for v in tests])
+    rows += [[display_to_uint8(inpainter(name)(ds.images[v], dilate(ds.masks[v], dil))) for v in tests]
+             for name in ("telea", "fsr")]
     rows += [[iio.imread(os.path.join(r["out"], f"view{v:03d}_bg.png"))[..., :3] for v in tests]
              for r in strategies.values()]
     images = [im for row in rows for im in row]

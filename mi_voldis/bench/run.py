@@ -134,7 +134,7 @@ def time_to_within(curve, best, tolerance=0.5):
 
 # settings of the background phase alone (bg_strategy first): the removal section's strategies refit it
 # from the full field with today's defaults
-BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter")
+BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha")
 
 
 def make_data(scene, out, log_dir, quick):

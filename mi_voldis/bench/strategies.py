@@ -8,8 +8,9 @@ OUT receives ``metrics.json`` and the background of each held-out view as PNG. S
 views against the ground-truth background (in-mask = masks dilated by ``hull_dilation``): PSNR inside
 the masks (and there, apart, where some training view sees the background unmasked and where none
 does: :mod:`mi_voldis.bench.visible`) and outside them (beside the full field's outside them), the
-object's residue, the foreground coverage IoU and the view-to-view consistency; OpenCV's Telea and Navier-Stokes on each
-held-out view itself (they see the photo around the mask) beside them. MASKED_DATASET: fit the
+object's residue, the foreground coverage IoU and the view-to-view consistency; the 2D inpainters of
+:data:`~mi_voldis.inpaint2d.BASELINES` on each held-out view itself (they see the photo around the
+mask) beside them. MASKED_DATASET: fit the
 background with that copy of RUN's dataset (other object masks, e.g. from scripts/make_masks.py);
 scores still use RUN's dataset and its ground-truth masks. ``--set``: settings over RUN's (as
 ``scripts/train.py --set``).
@@ -26,7 +27,7 @@ PREVIEWS = 4  # held-out views previewed when the dataset has neither ground tru
 
 def evaluate(ds, integrator, dilation_fraction):
     """Per-method rows (the volume's background, Telea, NS) and the volume's held-out renders."""
-    from ..inpaint2d import opencv_inpaint
+    from ..inpaint2d import BASELINES, inpainter
     from ..metrics import dilate, iou, object_residue, psnr
     from ..render.views import render_camera
     from ..tasks.removal import consistency
@@ -36,9 +37,9 @@ def evaluate(ds, integrator, dilation_fraction):
     # without ground truth: the consistency alone, on every held-out view (none without masks either)
     tests = scored or (list(ds.test) if ds.masks is not None else [])
     renders = {v: render_camera(integrator, ds.cameras[v], ("full", "bg", "fg")) for v in tests}
-    images = {"volume": {v: np.clip(renders[v]["bg"][0], 0, 1) for v in tests},
-              "telea": {v: opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "telea") for v in tests},
-              "ns": {v: opencv_inpaint(ds.images[v], dilate(ds.masks[v], dil), "ns") for v in tests}}
+    images = {"volume": {v: np.clip(renders[v]["bg"][0], 0, 1) for v in tests}}
+    for name in BASELINES:
+        images[name] = {v: inpainter(name)(ds.images[v], dilate(ds.masks[v], dil)) for v in tests}
     depth = {v: renders[v]["bg"][2] for v in tests}
     # the masked pixels whose background (at the volume's depth) some training view sees unmasked
     surfaces = training_surfaces(ds, integrator) if scored else {}

@@ -73,9 +73,9 @@ def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
 def start_harmonic(inputs, state):
     """Background = full field with the object's visual hull inpainted from around it: a harmonic
     extension of density and colour, so surfaces the object hides (the floor under it) continue
-    through the hull, except in the object's own dense voxels (full-field opacity per voxel above
-    ``object_alpha``), which are emptied so that w_fg = w_full - w_bg keeps the whole object; then
-    L_bg refits what some view sees."""
+    through the hull, except in the object's own voxels (:func:`background_regions`), which are
+    emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view sees.
+    Returns the hull and the object's voxels (:func:`background_regions`)."""
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
     hull, points, obj = background_regions(inputs, state, neighbours)
@@ -83,10 +83,11 @@ def start_harmonic(inputs, state):
                                   full.density_scale)
     values = harmonic_fill(full.data, full.width, hull, neighbours)
     channel = dr.arange(mi.UInt32, dr.width(values)) % full.width
-    obj = dr.repeat(obj, full.width)  # the object itself: empty, and black so that there c_fg = c_full
-    values = dr.select(obj & (channel == 0), empty, dr.select(obj & (channel > 0), EMPTY_COLOR, values))
+    packed = dr.repeat(obj, full.width)  # the object itself: empty, and black so that there c_fg = c_full
+    values = dr.select(packed & (channel == 0), empty, dr.select(packed & (channel > 0), EMPTY_COLOR, values))
     state.fields["bg"] = FieldState(full.layout, values, full.channels, full.to_world.copy(), full.density_scale)
     state.hull_points = points
+    return hull, obj
 
 
 def voxel_of(field):
@@ -95,13 +96,17 @@ def voxel_of(field):
 
 def background_regions(inputs, state, neighbours=None):
     """The visual hull (Float per stored vertex), its vertices' positions, and the object's own voxels
-    (Bool: hull vertices whose full-field opacity per voxel exceeds ``object_alpha``)."""
+    (Bool): hull vertices whose full-field opacity per voxel exceeds ``object_alpha`` and that no
+    training view sees unmasked (:func:`never_seen`): the walls and floor around the object that some
+    view sees are no part of it, however opaque, so a low ``object_alpha`` can take in the object's
+    soft edge without carving the surfaces beside it."""
+    from .lift import training_depths
     full = state.fields["full"]
     neighbours = neighbours or neighbour_vertices(full)
     hull, points = hull_region(inputs, full, neighbours)
     raw = dr.gather(mi.Float, full.data, dr.arange(mi.UInt32, full.vertices) * full.width)
     dense = raw > density_raw_for_alpha(inputs.cfg.object_alpha, voxel_of(full), full.density_scale)
-    return hull, points, (hull > 0) & dense
+    return hull, points, never_seen(inputs, full, (hull > 0) & dense, training_depths(inputs, state, median=True))
 
 
 def background_ray_pool(ds, bank, dilation):

@@ -142,17 +142,19 @@ class FitConfig(Settings):
     prior_rays: float = setting(0.25, "rays of that prior per step, fraction of batch_rays", above=0, high=1)
     prior_views: int = setting(4, "reference views inpainted and lifted in turn, each where the background "
                                   "still has a hole (bg_strategy 'lift')", low=1)
-    prior_inpainter: str = setting("telea", "2D inpainter of the prior's views ('guided': every masked view, "
-                                              "'lift': the reference views): 'telea' or 'ns' (OpenCV), "
-                                              "'membrane' (harmonic)", choices=("telea", "ns", "membrane"))
+    prior_inpainter: str = setting("fsr", "2D inpainter of the prior's views ('guided': every masked view, "
+                                              "'lift': the reference views): 'telea' or 'ns' (OpenCV), 'fsr' "
+                                              "(OpenCV contrib's frequency-selective reconstruction), "
+                                              "'membrane' (harmonic)", choices=("telea", "ns", "fsr", "membrane"))
     hull_dilation: float = setting(0.03, "mask dilation for the visual hull, fraction of image diagonal",
                                    low=0, high=1)
     hull_min_views: float = setting(0.9, "a cell is in the hull if inside the dilated mask in this fraction of "
                                          "the views that see it", above=0, high=1)
     bg_ray_dilation: float = setting(0.15, "refit rays come from masks dilated by this fraction of the "
                                            "diagonal", low=0, high=1)
-    object_alpha: float = setting(0.5, "hull voxels this opaque in the full field are the object: emptied "
-                                       "in bg (bg_strategy 'harmonic', 'guided')", above=0, high=1)
+    object_alpha: float = setting(0.2, "hull voxels this opaque in the full field that no training view sees "
+                                       "unmasked are the object: emptied in bg (bg_strategy 'harmonic', "
+                                       "'guided')", above=0, high=1)
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)

@@ -24,6 +24,7 @@ from ..cameras import pixel_rays
 from ..device import from_numpy
 from ..field_state import FieldState, density_raw_for_alpha, resample
 from ..inpaint2d import fill_disparity, inpainter
+from ..masks3d import median_depth
 from ..metrics import dilate
 from ..render.views import render_camera
 from .fields import fit_integrator
@@ -159,9 +160,10 @@ def empty_keys(field, keys, empty_raw):
     return FieldState(field.layout, data, field.channels, field.to_world, field.density_scale)
 
 
-def training_depths(inputs, state, count=24, extra=()):
+def training_depths(inputs, state, count=24, extra=(), median=False):
     """Full-field depth maps of ``count`` training views spread over the set (and of ``extra``); NaN
-    where a ray ends on nothing (opacity below a half)."""
+    where a ray ends on nothing (opacity below a half). The expected depth, or with ``median`` the
+    median (where the transmittance falls to a half: a faint haze in front does not pull it nearer)."""
     ds = inputs.ds
     train = list(ds.train)
     pick = np.unique(np.linspace(0, len(train) - 1, min(count, len(train))).round().astype(int))
@@ -169,8 +171,12 @@ def training_depths(inputs, state, count=24, extra=()):
     integrator = fit_integrator(inputs, state)
     out = {}
     for u in views:
-        _, alpha, depth = render_camera(integrator, ds.cameras[u], ("full",))["full"]
-        out[u] = np.where(alpha > 0.5, depth, np.nan)
+        if median:
+            depth, hit = median_depth(integrator, ds.cameras[u])
+            out[u] = np.where(hit, depth, np.nan)
+        else:
+            _, alpha, depth = render_camera(integrator, ds.cameras[u], ("full",))["full"]
+            out[u] = np.where(alpha > 0.5, depth, np.nan)
     return out
 
 

@@ -10,7 +10,7 @@ Phases (``bg_strategy``):
 
 * ``harmonic``: fit the full field; the background starts as a copy of it with the object's
   visual hull (from the masks) filled with the harmonic extension of the field around it, the
-  object's own dense voxels emptied (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull
+  object's own voxels (dense, unseen unmasked) emptied (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull
   cells are refitted with L_bg on rays near the masks. Outside the hull the two fields are identical,
   so the foreground w_full - w_bg is exactly zero there.
 * ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
@@ -101,9 +101,10 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     if state.phase == "bg" and has_masks and not scratch:
         t0 = time.perf_counter()
         harmonic = cfg.bg_strategy in ("harmonic", "guided")
+        regions = None
         if "bg" not in state.fields or state.hull_points is None:
             if harmonic:
-                start_harmonic(inputs, state)
+                regions = start_harmonic(inputs, state)
             else:
                 state.prior_keys = start_cleared(inputs, state)
                 state.prior = {"vertices_emptied": int(len(state.prior_keys))}
@@ -113,7 +114,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
                 state.prior.update(lifted)
                 state.prior_keys = np.union1d(state.prior_keys, keys)
         if harmonic:  # the object's own voxels stay empty
-            hull, _, obj = background_regions(inputs, state)
+            hull, obj = regions or background_regions(inputs, state)[::2]
             free = dr.select(obj, 0.0, hull)
         else:  # on the background's lattice (the lifted prior may have allocated bricks)
             free = cleared_region(inputs, state)

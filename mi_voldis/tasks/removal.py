@@ -1,7 +1,8 @@
 """Removal: the background volume on its own (paper: removal == the background in isolation).
 
-Measured against the ground truth where the dataset has it, and against OpenCV's 2D inpainting
-(Telea and Navier-Stokes, per view, with the same dilated masks): PSNR / SSIM inside the masks, the
+Measured against the ground truth where the dataset has it, and against 2D inpainting per view with
+the same dilated masks (:data:`~mi_voldis.inpaint2d.BASELINES`: OpenCV's Telea and Navier-Stokes,
+OpenCV contrib's FSR): PSNR / SSIM inside the masks, the
 object's residue (:func:`mi_voldis.metrics.object_residue`: the share of its pixels still closer to its
 own colour than to the true background), and
 view-to-view consistency: each held-out view's inpainting, reprojected into its nearest held-out
@@ -11,7 +12,7 @@ reason to agree with itself across views; a volume does by construction).
 import numpy as np
 
 from ..cameras import pixel_rays, project
-from ..inpaint2d import opencv_inpaint
+from ..inpaint2d import BASELINES, inpainter
 from ..metrics import dilate, object_residue, psnr, ssim
 
 
@@ -55,13 +56,13 @@ def run(run, output, progress=True):
         return output.finish({"task": "removal", "note": "dataset has no object masks: nothing to remove"})
     dilation = output.settings.mask_dilation
     dil = int(np.ceil(dilation * np.hypot(*ds.size)))
-    methods = {"volume": {}, "telea": {}, "ns": {}}
+    methods = {"volume": {}, **{name: {} for name in BASELINES}}
     depth = {}
     for v in ds.test:
         region = dilate(ds.masks[v], dil)
         methods["volume"][v] = np.clip(renders[v]["bg"][0], 0, 1)
-        methods["telea"][v] = opencv_inpaint(ds.images[v], region, "telea")
-        methods["ns"][v] = opencv_inpaint(ds.images[v], region, "ns")
+        for name in BASELINES:
+            methods[name][v] = inpainter(name)(ds.images[v], region)
         depth[v] = renders[v]["bg"][2]
     rows = {}
     for name, images in methods.items():
