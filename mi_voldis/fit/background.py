@@ -73,8 +73,8 @@ def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
 def start_harmonic(inputs, state):
     """Background = full field with the object's visual hull inpainted from around it: a harmonic
     extension of density and colour, so surfaces the object hides (the floor under it) continue
-    through the hull, except in the object's own voxels (:func:`background_regions`), which are
-    emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view sees.
+    through the hull, except in the object's own voxels (:func:`background_regions`), whose density
+    is emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view sees.
     Returns the hull and the object's voxels (:func:`background_regions`)."""
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
@@ -83,8 +83,10 @@ def start_harmonic(inputs, state):
                                   full.density_scale)
     values = harmonic_fill(full.data, full.width, hull, neighbours)
     channel = dr.arange(mi.UInt32, dr.width(values)) % full.width
-    packed = dr.repeat(obj, full.width)  # the object itself: empty, and black so that there c_fg = c_full
-    values = dr.select(packed & (channel == 0), empty, dr.select(packed & (channel > 0), EMPTY_COLOR, values))
+    # the object itself: empty, its colour the fill's (colour is interpolated before its activation, so
+    # black beside the floor under the object would darken it; black where a whole neighbourhood is
+    # empty, c_fg = c_full, comes at the end of the fit: clear_empty_background_color)
+    values = dr.select(dr.repeat(obj, full.width) & (channel == 0), empty, values)
     state.fields["bg"] = FieldState(full.layout, values, full.channels, full.to_world.copy(), full.density_scale)
     state.hull_points = points
     return hull, obj
