@@ -33,7 +33,8 @@ def fsr_inpaint(image, hole):
     Telea and Navier-Stokes smear them."""
     import cv2
     if not hasattr(cv2, "xphoto"):
-        raise RuntimeError("inpainter 'fsr' needs OpenCV's contrib modules: pip install opencv-contrib-python-headless")
+        raise RuntimeError("inpainter 'fsr' needs OpenCV's contrib modules (cv2.xphoto): pip install "
+                           "opencv-contrib-python-headless, or --set prior_inpainter=\"telea\"")
     img8 = np.round(np.clip(image, 0, 1) * 255).astype(np.uint8)
     out = np.zeros_like(img8)
     cv2.xphoto.inpaint(img8, np.where(hole, 0, 255).astype(np.uint8), out, cv2.xphoto.INPAINT_FSR_FAST)

@@ -101,6 +101,20 @@ def test_fsr_without_the_contrib_modules_says_what_to_install(monkeypatch):
         inpainter("fsr")(np.zeros((8, 8, 3), np.float32), np.ones((8, 8), bool))
 
 
+def test_a_fit_without_its_inpainter_stops_before_fitting_anything(monkeypatch, tmp_path):
+    """The default prior needs cv2.xphoto: without it the fit says so at once, not after the full
+    phase, and writes no checkpoint."""
+    import cv2
+
+    from mi_voldis.fit.train import fit
+    ds, cfg, *_ = synthetic_object_scene(views=5)
+    monkeypatch.delattr(cv2, "xphoto")
+    checkpoint = tmp_path / "state.npz"
+    with pytest.raises(RuntimeError, match="prior_inpainter"):
+        fit(ds, str(checkpoint), cfg.replace(prior_inpainter="fsr"), progress=False)
+    assert not checkpoint.exists()
+
+
 def sphere_over_plane_from_two_cameras():
     """A sphere above the plane y = FLOOR_Y seen by two cameras: its centre and radius, the cameras, and
     per camera the exact depth (distance along each pixel-centre ray) and the sphere's mask."""

@@ -294,7 +294,7 @@ def _removal_targets(results):
     from ..fit.config import FitConfig
     default = FitConfig().bg_strategy
     md = [f"## Default strategy (`{default}`) against the best 2D method", "",
-          "| scene | PSNR in mask | best 2D | margin (target +2) | margin over Telea / NS | consistency | best 2D | "
+          "| scene | PSNR in mask | best 2D | margin | margin over Telea / NS (target +2) | consistency | best 2D | "
           "margin (target +3) | outside - full field (target >= -0.5) | coverage IoU (target 0.9) | residue |",
           "|---|---|---|---|---|---|---|---|---|---|---|"]
     margins = []
@@ -324,8 +324,8 @@ SHEET_WIDTH = 1600  # pixels across a removal sheet at most
 
 def _removal_sheet(run, strategies, path, views=3):
     """One PNG: for the first ``views`` held-out views (None: all; columns), the photo, the ground-truth
-    background (when the dataset has one), OpenCV's Telea and contrib FSR inpaintings and each strategy's background
-    (rows). Returns its file name, or None."""
+    background (when the dataset has one), OpenCV's Telea and contrib FSR inpaintings and each
+    strategy's background (rows). Returns its file name, or None."""
     import json
 
     import imageio.v3 as iio

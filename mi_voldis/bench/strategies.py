@@ -26,7 +26,7 @@ PREVIEWS = 4  # held-out views previewed when the dataset has neither ground tru
 
 
 def evaluate(ds, integrator, dilation_fraction):
-    """Per-method rows (the volume's background, Telea, NS) and the volume's held-out renders."""
+    """Per-method rows (the volume's background, then each 2D baseline) and the volume's held-out renders."""
     from ..inpaint2d import BASELINES, inpainter
     from ..metrics import dilate, iou, object_residue, psnr
     from ..render.views import render_camera

@@ -35,6 +35,7 @@ import numpy as np
 
 from .. import exposure
 from ..field_state import FieldState, neighbour_vertices
+from ..inpaint2d import inpainter as get_inpainter
 from ..metrics import psnr
 from ..optim.adam import Adam
 from ..optim.loop import optimize
@@ -77,6 +78,8 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     if resume and state is None:
         raise ValueError(f"{checkpoint}: no checkpoint to resume from")
     has_masks = dataset.masks is not None
+    if has_masks and cfg.bg_strategy in ("guided", "lift"):  # fail now, not after the full phase
+        check_inpainter(inpainter or cfg.prior_inpainter)
     scratch = cfg.bg_strategy == "scratch" and has_masks
     roles = ("full", "bg") if scratch else ("full",)
     if state is None:
@@ -135,6 +138,14 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         state.empty_color_fraction = clear_empty_background_color(inputs, state, cleared)
     state.save(checkpoint, "done", 0)
     return inputs, state
+
+
+def check_inpainter(fill):
+    """Run the 2D inpainter ``fill`` (a name or a callable) on a tiny image: raises what it would raise
+    in the background phase (e.g. a missing library) before any fitting."""
+    image, hole = np.full((8, 8, 3), 0.5, np.float32), np.zeros((8, 8), bool)
+    hole[3:5, 3:5] = True
+    get_inpainter(fill)(image, hole)
 
 
 def cleared_region(inputs, state):
