@@ -312,24 +312,9 @@ def test_removal_leaves_nothing_of_the_object(strategy, tmp_path):
         assert state.prior["vertices_written"] > 0
 
 
-def test_the_objects_cells_are_the_dense_hull_cells_no_view_sees_unmasked(tmp_path):
-    """On the sphere standing on the floor, with ``object_alpha`` low enough to take in a soft edge: the
-    object's cells hold the sphere's inside and, of the floor's surface cells inside the hull, exactly
-    those that no training view sees unmasked (analytically: outside the view's mask grown by a pixel,
-    the ray to the cell not through the sphere), though all are opaque; the sphere's haze is no part.
-    The full field's median depth decides what a view sees: the haze in front of the floor beside the
-    sphere does not hide it."""
-    from mi_voldis.fit.background import background_regions
-    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
-    assert cfg.object_alpha <= 0.2
-    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, 0.9, 0.99), fields={"full": full})
-    inputs = FitInputs.of(ds, cfg, str(tmp_path / "state.npz"), False)
-    hull, _, obj = background_regions(inputs, state)
-    hull, obj = np.array(hull) > 0, np.array(obj)
-    pts, real = vertex_positions(full)
-    voxel = 2.0 / 39
-    centre = np.array([0.0, FLOOR_Y + 0.3, 0.0])
-    r = np.linalg.norm(pts - centre, axis=1)
+def sphere_seen_unmasked(ds, pts, voxel, centre, radius=0.3):
+    """Per point: some masked training view has it in view outside its mask grown by a pixel, the ray
+    to it not through the sphere (analytic visibility on :func:`synthetic_object_scene`)."""
     seen = np.zeros(len(pts), bool)
     for v in ds.masked_train:
         cam = ds.cameras[v]
@@ -339,12 +324,66 @@ def test_the_objects_cells_are_the_dense_hull_cells_no_view_sees_unmasked(tmp_pa
         ok[ok] &= ~dilate(ds.masks[v], 1)[iy[ok], ix[ok]]
         o = np.broadcast_to(cam.to_world[:3, 3], pts.shape)
         dist = np.linalg.norm(pts - o, axis=1)
-        seen |= ok & ~(sphere_hit(o, (pts - o) / dist[:, None], centre, 0.3) < dist - voxel)
+        seen |= ok & ~(sphere_hit(o, (pts - o) / dist[:, None], centre, radius) < dist - voxel)
+    return seen
+
+
+def object_cells(tmp_path, **settings):
+    from mi_voldis.fit.background import background_regions
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
+    cfg = cfg.replace(**settings)
+    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, 0.9, 0.99), fields={"full": full})
+    inputs = FitInputs.of(ds, cfg, str(tmp_path / "state.npz"), False)
+    hull, _, obj = background_regions(inputs, state)
+    pts, real = vertex_positions(full)
+    return ds, cfg, np.array(hull) > 0, np.array(obj), pts, real
+
+
+def test_the_objects_cells_are_the_dense_hull_cells_no_view_sees_unmasked(tmp_path):
+    """On the sphere standing on the floor, with ``object_alpha`` low enough to take in a soft edge: the
+    object's cells hold the sphere's inside and, of the floor's surface cells inside the hull, exactly
+    those that no training view sees unmasked (analytically: outside the view's mask grown by a pixel,
+    the ray to the cell not through the sphere), though all are opaque; the sphere's haze is no part.
+    The full field's median depth decides what a view sees: the haze in front of the floor beside the
+    sphere does not hide it."""
+    ds, cfg, hull, obj, pts, real = object_cells(tmp_path, object_front=False)
+    assert cfg.object_alpha <= 0.2
+    voxel = 2.0 / 39
+    centre = np.array([0.0, FLOOR_Y + 0.3, 0.0])
+    r = np.linalg.norm(pts - centre, axis=1)
+    seen = sphere_seen_unmasked(ds, pts, voxel, centre)
     surface = real & hull & (pts[:, 1] > FLOOR_Y + 0.5 * voxel) & (pts[:, 1] < FLOOR_Y + 1.5 * voxel)
     assert (surface & seen).sum() > 50 and (surface & ~seen).sum() > 50
     np.testing.assert_array_equal(obj[surface], ~seen[surface])
     assert obj[real & (r < 0.3 - voxel)].all()
     assert not obj[real & (r > 0.3 + 0.5 * voxel) & (pts[:, 1] > FLOOR_Y + 2 * voxel)].any()
+
+
+def test_the_cells_before_the_object_on_masked_rays_join_it_where_no_view_sees_them(tmp_path):
+    """With ``object_front`` the object's cells are those of the dense rule and, in addition, hull cells
+    in front of the sphere: each lies within a cell's diagonal of a masked ray's way from the camera to
+    the sphere (a corner of a cell it samples) and no view sees it unmasked, and none is inside the
+    sphere (the dense rule has those)."""
+    ds, _, hull, obj, pts, real = object_cells(tmp_path, object_front=True)
+    _, _, _, dense, _, _ = object_cells(tmp_path, object_front=False)
+    voxel = 2.0 / 39
+    centre = np.array([0.0, FLOOR_Y + 0.3, 0.0])
+    assert (obj >= dense).all()
+    added = obj & ~dense
+    assert added.sum() > 20
+    assert not (added & sphere_seen_unmasked(ds, pts, voxel, centre)).any()
+    assert not (added & ~hull).any()
+    near = np.full(added.sum(), np.inf)  # distance to the nearest masked ray before the sphere
+    for v in ds.masked_train:
+        cam = ds.cameras[v]
+        py, px = np.nonzero(ds.masks[v])
+        o, d = pixel_rays(cam, px + 0.5, py + 0.5)
+        end = sphere_hit(o, d, centre, 0.3)
+        rel = pts[added][:, None, :] - o[None]
+        t = np.clip(np.einsum("pri,ri->pr", rel, d), 0, end[None])
+        near = np.minimum(near, np.linalg.norm(rel - t[..., None] * d[None], axis=-1).min(axis=1))
+    assert (near <= np.sqrt(3) * voxel).all()  # a corner of a cell some such ray samples
+    assert (np.linalg.norm(pts[added] - centre, axis=1) >= 0.3 - voxel).all()  # in front, not inside
 
 
 def test_the_inpainting_hole_takes_in_occluders_in_front_of_the_object_only():

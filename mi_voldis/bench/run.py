@@ -134,7 +134,8 @@ def time_to_within(curve, best, tolerance=0.5):
 
 # settings of the background phase alone (bg_strategy first): the removal section's strategies refit it
 # from the full field with today's defaults
-BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha")
+BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
+                       "object_front")
 
 
 def make_data(scene, out, log_dir, quick):
@@ -150,7 +151,8 @@ def make_data(scene, out, log_dir, quick):
 
 
 # ------------------------------------------------------------------------------------ 4. removal
-STRATEGIES = ["lift", "clear", "harmonic", "guided"]  # bg_strategy values compared from one fitted full field
+# bg_strategy values compared from one fitted full field; "STRATEGY+SETTING": with that boolean setting on
+STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided+object_front"]
 
 
 def ground_truth_fits(work, scenes, results):
@@ -177,7 +179,8 @@ def save_results(results, report_dir, name):
     return results
 
 
-CAPTURE_STRATEGIES = ["harmonic", "guided"]  # on captures without ground truth: the default before and after
+# on captures without ground truth: the previous default, the default and its variant
+CAPTURE_STRATEGIES = ["harmonic", "guided", "guided+object_front"]
 REMOVAL_CAPTURES = ["statue"]  # captures with object masks (../shared/data; skipped when absent)
 
 
@@ -208,8 +211,10 @@ def strategy_rows(work, scene, run, strategies, logs):
     sets = [a for key in BACKGROUND_SETTINGS[1:] for a in ("--set", f"{key}={json.dumps(defaults[key])}")]
     rows = {}
     for strategy in strategies:
+        name, _, switch = strategy.partition("+")
         out = os.path.join(work, "removal", scene, strategy)
-        args = ["-m", "mi_voldis.bench.strategies", run["out"], strategy, out] + sets
+        args = (["-m", "mi_voldis.bench.strategies", run["out"], name, out] + sets
+                + (["--set", f"{switch}=true"] if switch else []))
         wall = child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
         with open(os.path.join(out, "metrics.json")) as f:
             rows[strategy] = {**json.load(f), "wall_seconds": wall, "out": out, "command": "python " + " ".join(args)}

@@ -6,8 +6,11 @@ import mitsuba as mi
 import numpy as np
 
 from ..bricks import EMPTY_COLOR, EMPTY_DENSITY
+from ..cameras import pixel_rays
+from ..device import from_numpy
 from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, neighbour_vertices, vertex_positions
 from ..metrics import dilate
+from ..render import march
 from .hull import visual_hull
 from .visibility import in_view
 
@@ -98,17 +101,71 @@ def voxel_of(field):
 
 def background_regions(inputs, state, neighbours=None):
     """The visual hull (Float per stored vertex), its vertices' positions, and the object's own voxels
-    (Bool): hull vertices whose full-field opacity per voxel exceeds ``object_alpha`` and that no
-    training view sees unmasked (:func:`never_seen`): the walls and floor around the object that some
-    view sees are no part of it, however opaque, so a low ``object_alpha`` can take in the object's
-    soft edge without carving the surfaces beside it."""
+    (Bool): hull vertices that no training view sees unmasked (:func:`never_seen`) and that either hold
+    the object's density (full-field opacity per voxel above ``object_alpha``) or, with
+    ``object_front``, lie in front of it on a masked ray (:func:`before_the_object`). The walls and
+    floor around the object that some view sees are no part of it, however opaque, so a low
+    ``object_alpha`` can take in the object's soft edge without carving the surfaces beside it."""
     from .lift import training_depths
-    full = state.fields["full"]
+    cfg, full = inputs.cfg, state.fields["full"]
     neighbours = neighbours or neighbour_vertices(full)
     hull, points = hull_region(inputs, full, neighbours)
     raw = dr.gather(mi.Float, full.data, dr.arange(mi.UInt32, full.vertices) * full.width)
-    dense = raw > density_raw_for_alpha(inputs.cfg.object_alpha, voxel_of(full), full.density_scale)
-    return hull, points, never_seen(inputs, full, (hull > 0) & dense, training_depths(inputs, state, median=True))
+    candidates = raw > density_raw_for_alpha(cfg.object_alpha, voxel_of(full), full.density_scale)
+    if cfg.object_front:
+        candidates |= before_the_object(inputs, state, list(inputs.ds.masked_train))
+    return hull, points, never_seen(inputs, full, (hull > 0) & candidates, training_depths(inputs, state, median=True))
+
+
+def before_the_object(inputs, state, views, reach=2.0, erode=1, chunk=1 << 16):
+    """Bool per stored vertex of the full field: the corners of the cells that the masked rays of
+    ``views`` (masks eroded by ``erode`` pixels: edge rays graze past the object) sample within
+    ``reach`` voxels before their median point (where the transmittance falls below a half), that
+    sample included. On a masked ray nothing but the object stands in front of the background, so a
+    background drawn just before the object's surface would be its colour at its place and cover it
+    in w_fg = w_full - w_bg; the band stays thin so that a mask wider than the object (its median
+    point far behind) marks nothing but the space just before that far surface."""
+    from .fields import fit_integrator
+    ds, full = inputs.ds, state.fields["full"]
+    plan = fit_integrator(inputs, state).plan(("full",))
+    chain = plan.sources.full
+    marks = dr.zeros(mi.Float, full.vertices)
+    m = full.to_world
+    origin = mi.Point3f(*(float(x) for x in m[:3, 3]))
+    scale = mi.Vector3f(*(float(x) for x in (np.array(full.shape) - 1) / np.diag(m)[:3]))
+    top = [int(n) - 2 for n in full.shape]  # a cell's lower corner: its upper one stays in the lattice
+    band = reach * voxel_of(full)
+
+    with dr.suspend_grad():
+        for v in views:
+            py, px = np.nonzero(ds.masks[v] & ~dilate(~ds.masks[v], erode))
+            o, d = pixel_rays(ds.cameras[v], px + 0.5, py + 0.5)
+            for s in range(0, len(o), chunk):
+                n = min(chunk, len(o) - s)
+                index = dr.arange(mi.UInt32, n)
+                median = [dr.zeros(mi.Float, n) for _ in range(3)]
+                ends = dr.zeros(mi.Float, n)
+
+                def find(p, w, active, depth):  # each ray's median point (scene space)
+                    before = dr.exp(-depth[chain])
+                    at = active & (before >= 0.5) & (before - w[chain] < 0.5)
+                    for axis in range(3):
+                        dr.scatter(median[axis], p[axis], index, at)
+                    dr.scatter(ends, 1.0, index, at)
+
+                def mark(p, w, active, depth):  # the band before it
+                    end = mi.Point3f(*(dr.gather(mi.Float, c, index) for c in median))
+                    hit = (active & (dr.gather(mi.Float, ends, index) > 0) & (dr.exp(-depth[chain]) >= 0.5)
+                           & (dr.norm(end - p) <= band))
+                    lower = [mi.UInt32(dr.clip(mi.Int32(dr.floor(c)), 0, t)) for c, t in zip((p - origin) * scale, top)]
+                    for a in range(8):
+                        i, j, k = (c + ((a >> axis) & 1) for axis, c in enumerate(lower))
+                        dr.scatter(marks, 1.0, full.layout.address(i, j, k, hit), hit)
+
+                rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o[s:s + n]), from_numpy(mi.Vector3f, d[s:s + n]))
+                for probe in (find, mark):
+                    march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
+    return marks > 0
 
 
 def background_ray_pool(ds, bank, dilation):
