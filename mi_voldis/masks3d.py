@@ -40,10 +40,18 @@ def surfaces(integrator, cameras):
 
 
 def median_depth(integrator, camera, chunk=1 << 16):
-    plan = integrator.plan(("full",))
-    chain = plan.sources.full
     py, px = np.mgrid[0:camera.height, 0:camera.width]
     o, d = pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
+    points, hit = median_points(integrator, o, d, chunk)
+    depth = np.where(hit, np.linalg.norm(points - o, axis=1), 0.0)
+    return depth.reshape(camera.height, camera.width), hit.reshape(camera.height, camera.width)
+
+
+def median_points(integrator, o, d, chunk=1 << 16):
+    """The full field's median point on each world ray (``o``, ``d`` (n, 3)): where its transmittance
+    falls below a half, world space (n, 3), and whether it does (n,) bool."""
+    plan = integrator.plan(("full",))
+    chain = plan.sources.full
     points, hit = np.zeros((len(o), 3)), np.zeros(len(o), bool)
     with dr.suspend_grad():
         for s in range(0, len(o), chunk):
@@ -62,8 +70,7 @@ def median_depth(integrator, camera, chunk=1 << 16):
             march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
             f = np.array(found).reshape(n, 4)
             points[s:s + n], hit[s:s + n] = f[:, :3], f[:, 3] > 0
-    depth = np.where(hit, np.linalg.norm(points - o, axis=1), 0.0)
-    return depth.reshape(camera.height, camera.width), hit.reshape(camera.height, camera.width)
+    return points, hit
 
 
 def _points(camera, depth, valid):

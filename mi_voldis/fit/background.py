@@ -125,9 +125,11 @@ def before_the_object(inputs, state, views, reach=2.0, erode=1, chunk=1 << 16):
     background drawn just before the object's surface would be its colour at its place and cover it
     in w_fg = w_full - w_bg; the band stays thin so that a mask wider than the object (its median
     point far behind) marks nothing but the space just before that far surface."""
+    from ..masks3d import median_points
     from .fields import fit_integrator
     ds, full = inputs.ds, state.fields["full"]
-    plan = fit_integrator(inputs, state).plan(("full",))
+    integrator = fit_integrator(inputs, state)
+    plan = integrator.plan(("full",))
     chain = plan.sources.full
     marks = dr.zeros(mi.Float, full.vertices)
     m = full.to_world
@@ -140,31 +142,21 @@ def before_the_object(inputs, state, views, reach=2.0, erode=1, chunk=1 << 16):
         for v in views:
             py, px = np.nonzero(ds.masks[v] & ~dilate(~ds.masks[v], erode))
             o, d = pixel_rays(ds.cameras[v], px + 0.5, py + 0.5)
+            ends, hit = median_points(integrator, o, d, chunk)
+            o, d, ends = o[hit], d[hit], inputs.space.from_world_np(ends[hit])  # the median point, scene space
             for s in range(0, len(o), chunk):
                 n = min(chunk, len(o) - s)
-                index = dr.arange(mi.UInt32, n)
-                median = [dr.zeros(mi.Float, n) for _ in range(3)]
-                ends = dr.zeros(mi.Float, n)
+                end = from_numpy(mi.Point3f, ends[s:s + n])
 
-                def find(p, w, active, depth):  # each ray's median point (scene space)
-                    before = dr.exp(-depth[chain])
-                    at = active & (before >= 0.5) & (before - w[chain] < 0.5)
-                    for axis in range(3):
-                        dr.scatter(median[axis], p[axis], index, at)
-                    dr.scatter(ends, 1.0, index, at)
-
-                def mark(p, w, active, depth):  # the band before it
-                    end = mi.Point3f(*(dr.gather(mi.Float, c, index) for c in median))
-                    hit = (active & (dr.gather(mi.Float, ends, index) > 0) & (dr.exp(-depth[chain]) >= 0.5)
-                           & (dr.norm(end - p) <= band))
+                def mark(p, w, active, depth):  # the band before the median point
+                    near = active & (dr.exp(-depth[chain]) >= 0.5) & (dr.norm(end - p) <= band)
                     lower = [mi.UInt32(dr.clip(mi.Int32(dr.floor(c)), 0, t)) for c, t in zip((p - origin) * scale, top)]
                     for a in range(8):
                         i, j, k = (c + ((a >> axis) & 1) for axis, c in enumerate(lower))
-                        dr.scatter(marks, 1.0, full.layout.address(i, j, k, hit), hit)
+                        dr.scatter(marks, 1.0, full.layout.address(i, j, k, near), near)
 
                 rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o[s:s + n]), from_numpy(mi.Vector3f, d[s:s + n]))
-                for probe in (find, mark):
-                    march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
+                march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=mark)
     return marks > 0
 
 
