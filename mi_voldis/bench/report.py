@@ -208,8 +208,8 @@ def write_removal(results, report_dir, command):
           "Each scene is fitted once with the default command (`scripts/train.py DATA --out RUN "
           "--keep-checkpoints`, no setting); from its full field the background is fitted again with each "
           "`bg_strategy` (`python -m mi_voldis.bench.strategies RUN STRATEGY OUT --set ...`, every other "
-          "setting as the run's, the background's as today's defaults; `STRATEGY+SETTING`: that boolean "
-          "setting on). Scores on the held-out views against "
+          "setting as the run's, the background's as today's defaults; `STRATEGY+SETTING` / `STRATEGY-SETTING`: "
+          "that boolean setting on / off). Scores on the held-out views against "
           "the ground-truth background: PSNR inside the masks (dilated by 3% of the diagonal) and outside "
           "them (the full field's outside them beside it), "
           "the object's residue (share of its pixels closer to its own colour than to the true background; "
@@ -259,8 +259,8 @@ def write_removal(results, report_dir, command):
         m = entry["fit"]["metrics"]
         md += [f"## {capture} (a capture: no ground truth)", "",
                f"Full field: held-out PSNR {m['held_out']['psnr']:.2f} dB, fit {m['seconds']['fit']:.0f} s. "
-               "The previous default (`harmonic`), the default and its variant (`STRATEGY+SETTING`: with that "
-               "setting on), with the view-to-view consistency on every held-out view (PSNR inside the dilated "
+               "The previous default (`harmonic`), the default and its variant (`STRATEGY-SETTING`: with that "
+               "setting off), with the view-to-view consistency on every held-out view (PSNR inside the dilated "
                "masks; no ground truth to score against).", "",
                "| method | consistency | bg seconds |", "|---|---|---|"]
         base = None

@@ -15,6 +15,7 @@ their peak RSS.
 """
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -151,8 +152,9 @@ def make_data(scene, out, log_dir, quick):
 
 
 # ------------------------------------------------------------------------------------ 4. removal
-# bg_strategy values compared from one fitted full field; "STRATEGY+SETTING": with that boolean setting on
-STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided+object_front"]
+# bg_strategy values compared from one fitted full field; "STRATEGY+SETTING" / "STRATEGY-SETTING": with that
+# boolean setting on / off
+STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided-object_front"]
 
 
 def ground_truth_fits(work, scenes, results):
@@ -180,7 +182,7 @@ def save_results(results, report_dir, name):
 
 
 # on captures without ground truth: the previous default, the default and its variant
-CAPTURE_STRATEGIES = ["harmonic", "guided", "guided+object_front"]
+CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-object_front"]
 REMOVAL_CAPTURES = ["statue"]  # captures with object masks (../shared/data; skipped when absent)
 
 
@@ -204,6 +206,16 @@ def run_removal(work, report_dir, scenes=None):
     return save_results(results, report_dir, "removal.json")
 
 
+def strategy_switch(strategy):
+    """A strategy row's ``bg_strategy`` and its extra arguments: "guided-object_front" ->
+    ("guided", ["--set", "object_front=false"])."""
+    match = re.fullmatch(r"(\w+)(?:([+-])(\w+))?", strategy)
+    if match is None:
+        raise ValueError(f"strategy row {strategy!r}: expected STRATEGY, STRATEGY+SETTING or STRATEGY-SETTING")
+    name, sign, setting = match.groups()
+    return name, (["--set", f"{setting}={'true' if sign == '+' else 'false'}"] if setting else [])
+
+
 def strategy_rows(work, scene, run, strategies, logs):
     """Each of ``strategies`` refitted from ``run``'s full field: its metrics, wall seconds and command."""
     from ..fit.config import FitConfig
@@ -211,10 +223,9 @@ def strategy_rows(work, scene, run, strategies, logs):
     sets = [a for key in BACKGROUND_SETTINGS[1:] for a in ("--set", f"{key}={json.dumps(defaults[key])}")]
     rows = {}
     for strategy in strategies:
-        name, _, switch = strategy.partition("+")
+        name, switch = strategy_switch(strategy)
         out = os.path.join(work, "removal", scene, strategy)
-        args = (["-m", "mi_voldis.bench.strategies", run["out"], name, out] + sets
-                + (["--set", f"{switch}=true"] if switch else []))
+        args = ["-m", "mi_voldis.bench.strategies", run["out"], name, out] + sets + switch
         wall = child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
         with open(os.path.join(out, "metrics.json")) as f:
             rows[strategy] = {**json.load(f), "wall_seconds": wall, "out": out, "command": "python " + " ".join(args)}

@@ -102,36 +102,44 @@ def voxel_of(field):
 def background_regions(inputs, state, neighbours=None):
     """The visual hull (Float per stored vertex), its vertices' positions, and the object's own voxels
     (Bool): hull vertices that no training view sees unmasked (:func:`never_seen`) and that either hold
-    the object's density (full-field opacity per voxel above ``object_alpha``) or, with
-    ``object_front``, lie in front of it on a masked ray (:func:`before_the_object`). The walls and
-    floor around the object that some view sees are no part of it, however opaque, so a low
-    ``object_alpha`` can take in the object's soft edge without carving the surfaces beside it."""
+    the object's density where a masked ray can show it (full-field opacity per voxel above
+    ``object_alpha``, transmittance on some masked ray at least 5%) or, with ``object_front``, lie just
+    in front of it on a masked ray (:func:`masked_ray_cells`). The walls and floor around the object
+    that some view sees are no part of it, however opaque, so a low ``object_alpha`` can take in the
+    object's soft edge without carving the surfaces beside it; nor is the density hidden behind it,
+    where the refit continues the background."""
     from .lift import training_depths
     cfg, full = inputs.cfg, state.fields["full"]
     neighbours = neighbours or neighbour_vertices(full)
     hull, points = hull_region(inputs, full, neighbours)
     raw = dr.gather(mi.Float, full.data, dr.arange(mi.UInt32, full.vertices) * full.width)
-    candidates = raw > density_raw_for_alpha(cfg.object_alpha, voxel_of(full), full.density_scale)
+    shown, front = masked_ray_cells(inputs, state, list(inputs.ds.masked_train))
+    candidates = (raw > density_raw_for_alpha(cfg.object_alpha, voxel_of(full), full.density_scale)) & shown
     if cfg.object_front:
-        candidates |= before_the_object(inputs, state, list(inputs.ds.masked_train))
+        candidates |= front
     return hull, points, never_seen(inputs, full, (hull > 0) & candidates, training_depths(inputs, state, median=True))
 
 
-def before_the_object(inputs, state, views, reach=2.0, erode=1, chunk=1 << 16):
-    """Bool per stored vertex of the full field: the corners of the cells that the masked rays of
-    ``views`` (masks eroded by ``erode`` pixels: edge rays graze past the object) sample within
-    ``reach`` voxels before their median point (where the transmittance falls below a half), that
-    sample included. On a masked ray nothing but the object stands in front of the background, so a
-    background drawn just before the object's surface would be its colour at its place and cover it
-    in w_fg = w_full - w_bg; the band stays thin so that a mask wider than the object (its median
-    point far behind) marks nothing but the space just before that far surface."""
+def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chunk=1 << 16):
+    """Two Bools per stored vertex of the full field, from the masked rays of ``views`` (masks eroded
+    by ``erode`` pixels: edge rays graze past the object): the corners of the cells they sample while
+    their transmittance is at least ``visible``, and of those they sample within ``reach`` voxels
+    before their median point (where the transmittance falls below a half), that sample included.
+
+    The first is what of the object a view can show: behind an opaque object no fit constrains the
+    density, and the haze it leaves there (all the way to the far bound on a forward-facing capture)
+    is no part of the object but the free place where the background continues. The second is the
+    space just before the object's surface: on a masked ray nothing but the object stands in front of
+    the background, so a background drawn there would be its colour at its place and cover it in
+    w_fg = w_full - w_bg; the band stays thin so that a mask wider than the object (its median point
+    far behind) marks nothing but the space just before that far surface."""
     from ..masks3d import median_points
     from .fields import fit_integrator
     ds, full = inputs.ds, state.fields["full"]
     integrator = fit_integrator(inputs, state)
     plan = integrator.plan(("full",))
     chain = plan.sources.full
-    marks = dr.zeros(mi.Float, full.vertices)
+    lit, front = dr.zeros(mi.Float, full.vertices), dr.zeros(mi.Float, full.vertices)
     m = full.to_world
     origin = mi.Point3f(*(float(x) for x in m[:3, 3]))
     scale = mi.Vector3f(*(float(x) for x in (np.array(full.shape) - 1) / np.diag(m)[:3]))
@@ -143,21 +151,24 @@ def before_the_object(inputs, state, views, reach=2.0, erode=1, chunk=1 << 16):
             py, px = np.nonzero(ds.masks[v] & ~dilate(~ds.masks[v], erode))
             o, d = pixel_rays(ds.cameras[v], px + 0.5, py + 0.5)
             ends, hit = median_points(integrator, o, d, chunk)
-            o, d, ends = o[hit], d[hit], inputs.space.from_world_np(ends[hit])  # the median point, scene space
+            ends = np.where(hit[:, None], inputs.space.from_world_np(ends), np.inf)  # scene space; none: no band
             for s in range(0, len(o), chunk):
                 n = min(chunk, len(o) - s)
                 end = from_numpy(mi.Point3f, ends[s:s + n])
 
-                def mark(p, w, active, depth):  # the band before the median point
-                    near = active & (dr.exp(-depth[chain]) >= 0.5) & (dr.norm(end - p) <= band)
+                def mark(p, w, active, depth):
+                    before = dr.exp(-depth[chain])
+                    shown = active & (before >= visible)
+                    near = active & (before >= 0.5) & (dr.norm(end - p) <= band)
                     lower = [mi.UInt32(dr.clip(mi.Int32(dr.floor(c)), 0, t)) for c, t in zip((p - origin) * scale, top)]
                     for a in range(8):
                         i, j, k = (c + ((a >> axis) & 1) for axis, c in enumerate(lower))
-                        dr.scatter(marks, 1.0, full.layout.address(i, j, k, near), near)
+                        dr.scatter(lit, 1.0, full.layout.address(i, j, k, shown), shown)
+                        dr.scatter(front, 1.0, full.layout.address(i, j, k, near), near)
 
                 rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o[s:s + n]), from_numpy(mi.Vector3f, d[s:s + n]))
                 march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=mark)
-    return marks > 0
+    return lit > 0, front > 0
 
 
 def background_ray_pool(ds, bank, dilation):

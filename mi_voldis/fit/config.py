@@ -155,12 +155,10 @@ class FitConfig(Settings):
     object_alpha: float = setting(0.2, "hull voxels this opaque in the full field that no training view sees "
                                        "unmasked are the object: emptied in bg (bg_strategy 'harmonic', "
                                        "'guided')", above=0, high=1)
-    object_front: bool = setting(False, "hull voxels within two voxels before the full field's median point on a "
-                                        "masked ray (nothing but the object stands there) that no training view "
-                                        "sees unmasked are the object too, however faint: the prior cannot paint "
-                                        "the background over the object, so the foreground layer covers it "
-                                        "whole; but where no free cell lies behind the object its place shows "
-                                        "through dark (reports/removal.md)")
+    object_front: bool = setting(True, "hull voxels within two voxels before the full field's median point on a "
+                                       "masked ray (nothing but the object stands there) that no training view "
+                                       "sees unmasked are the object too, however faint: the prior cannot paint "
+                                       "the background over the object, so the foreground layer covers it whole")
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)

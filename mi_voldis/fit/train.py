@@ -10,9 +10,10 @@ Phases (``bg_strategy``):
 
 * ``harmonic``: fit the full field; the background starts as a copy of it with the object's
   visual hull (from the masks) filled with the harmonic extension of the field around it, the
-  object's own voxels (unseen unmasked, dense or, with ``object_front``, just before it on a masked
-  ray) emptied (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull cells are refitted
-  with L_bg on rays near the masks. Outside the hull the two fields are identical, so the foreground
+  object's own voxels (unseen unmasked, and dense where a masked ray can show them or, with
+  ``object_front``, just before them on a masked ray) emptied
+  (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull cells are refitted with L_bg on
+  rays near the masks. Outside the hull the two fields are identical, so the foreground
   w_full - w_bg is exactly zero there.
 * ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
   training view (each view's photo inpainted in its mask, occluders in front of the object left out of
