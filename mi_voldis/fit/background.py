@@ -139,7 +139,7 @@ def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chu
     integrator = fit_integrator(inputs, state)
     plan = integrator.plan(("full",))
     chain = plan.sources.full
-    lit, front = dr.zeros(mi.Float, full.vertices), dr.zeros(mi.Float, full.vertices)
+    shown, front = dr.zeros(mi.Float, full.vertices), dr.zeros(mi.Float, full.vertices)
     m = full.to_world
     origin = mi.Point3f(*(float(x) for x in m[:3, 3]))
     scale = mi.Vector3f(*(float(x) for x in (np.array(full.shape) - 1) / np.diag(m)[:3]))
@@ -157,18 +157,18 @@ def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chu
                 end = from_numpy(mi.Point3f, ends[s:s + n])
 
                 def mark(p, w, active, depth):
-                    before = dr.exp(-depth[chain])
-                    shown = active & (before >= visible)
+                    before = dr.exp(-depth[chain])  # transmittance up to the sample
+                    lit = active & (before >= visible)
                     near = active & (before >= 0.5) & (dr.norm(end - p) <= band)
                     lower = [mi.UInt32(dr.clip(mi.Int32(dr.floor(c)), 0, t)) for c, t in zip((p - origin) * scale, top)]
                     for a in range(8):
                         i, j, k = (c + ((a >> axis) & 1) for axis, c in enumerate(lower))
-                        dr.scatter(lit, 1.0, full.layout.address(i, j, k, shown), shown)
+                        dr.scatter(shown, 1.0, full.layout.address(i, j, k, lit), lit)
                         dr.scatter(front, 1.0, full.layout.address(i, j, k, near), near)
 
                 rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o[s:s + n]), from_numpy(mi.Vector3f, d[s:s + n]))
                 march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=mark)
-    return lit > 0, front > 0
+    return shown > 0, front > 0
 
 
 def background_ray_pool(ds, bank, dilation):
