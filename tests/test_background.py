@@ -495,3 +495,30 @@ def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only
     for v in ds.test:
         out = ~dilate(ds.masks[v], int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size))) + 2)
         assert np.abs(renders["guided"][v][out] - renders["harmonic"][v][out]).max() < 5e-3
+
+
+def test_consistency_of_a_textured_floor_is_high_with_its_true_depth_and_drops_with_a_wrong_one():
+    """The removal metric warps each view's image with its depth into the nearest other view: the exact
+    images of a floor texture agree through the floor's depth, not through a depth 30% too far."""
+    from types import SimpleNamespace
+
+    from mi_voldis.tasks.removal import consistency
+    cams = [Camera(look_at([0.0, 1.0, 1.8], [0.0, FLOOR_Y, 0.0]), 50.0, 64, 48),
+            Camera(look_at([0.4, 1.0, 1.7], [0.0, FLOOR_Y, 0.0]), 50.0, 64, 48)]
+
+    def floor_image(cam):
+        py, px = np.mgrid[0:cam.height, 0:cam.width]
+        o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
+        p = o + plane_depth(cam).reshape(-1, 1) * d
+        tex = np.stack([0.5 + 0.3 * np.sin(3 * p[:, 0]), 0.5 + 0.3 * np.cos(2 * p[:, 2]),
+                        0.5 + 0.2 * np.sin(2 * p[:, 0] + p[:, 2])], -1)
+        return tex.reshape(cam.height, cam.width, 3).astype(np.float32)
+
+    ds = SimpleNamespace(cameras=cams, masks=[np.ones((48, 64), bool)] * 2)
+    images = {v: floor_image(c) for v, c in enumerate(cams)}
+    depth = {v: plane_depth(c) for v, c in enumerate(cams)}
+    assert all(np.isfinite(d).all() for d in depth.values())
+    exact = consistency(ds, [0, 1], images, depth, 0)
+    wrong = consistency(ds, [0, 1], images, {v: 1.3 * d for v, d in depth.items()}, 0)
+    assert exact > 30.0
+    assert wrong < exact - 8.0

@@ -52,3 +52,21 @@ def test_a_removal_bench_row_names_its_strategy_and_the_boolean_setting_it_switc
         strategy_switch(row)
     with pytest.raises(ValueError, match="'guided object_front'"):
         strategy_switch("guided object_front")
+
+
+def test_a_refit_takes_the_background_settings_of_today_and_the_rest_of_the_run(tmp_path):
+    """A run fitted under older background defaults is refitted with today's (the bench and the hand
+    command agree); its other settings stay, and --set still wins."""
+    import json
+
+    from mi_voldis.bench.strategies import refit_config
+    from mi_voldis.fit.config import FitConfig
+    today = FitConfig()
+    old = {"prior_inpainter": "membrane" if today.prior_inpainter != "membrane" else "telea",
+           "object_alpha": 0.5 if today.object_alpha != 0.5 else 0.4, "steps_bg": today.steps_bg + 7}
+    (tmp_path / "config.json").write_text(json.dumps(old))
+    cfg = refit_config(str(tmp_path), "harmonic")
+    assert (cfg.bg_strategy, cfg.prior_inpainter, cfg.object_alpha) == ("harmonic", today.prior_inpainter,
+                                                                          today.object_alpha)
+    assert cfg.steps_bg == today.steps_bg + 7
+    assert refit_config(str(tmp_path), "guided", ["object_alpha=0.3"]).object_alpha == 0.3

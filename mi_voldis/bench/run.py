@@ -22,6 +22,7 @@ import sys
 import time
 
 from . import content, machine, rays, throughput
+from .strategies import BACKGROUND_SETTINGS
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SHARED = os.path.join(os.path.dirname(ROOT), "shared", "data")
@@ -133,12 +134,6 @@ def time_to_within(curve, best, tolerance=0.5):
     return next((t for t, p in curve if p >= best - tolerance), None)
 
 
-# settings of the background phase alone (bg_strategy first): the removal section's strategies refit it
-# from the full field with today's defaults
-BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
-                       "object_front")
-
-
 def make_data(scene, out, log_dir, quick):
     """A bundled scene's dataset, or (``scene`` 'random<SEED>') a random scene's, rendered once."""
     if not os.path.isfile(os.path.join(out, "transforms.json")):
@@ -218,14 +213,11 @@ def strategy_switch(strategy):
 
 def strategy_rows(work, scene, run, strategies, logs):
     """Each of ``strategies`` refitted from ``run``'s full field: its metrics, wall seconds and command."""
-    from ..fit.config import FitConfig
-    defaults = FitConfig().to_dict()  # the background's settings as today's defaults, whatever the run recorded
-    sets = [a for key in BACKGROUND_SETTINGS[1:] for a in ("--set", f"{key}={json.dumps(defaults[key])}")]
     rows = {}
     for strategy in strategies:
         name, switch = strategy_switch(strategy)
         out = os.path.join(work, "removal", scene, strategy)
-        args = ["-m", "mi_voldis.bench.strategies", run["out"], name, out] + sets + switch
+        args = ["-m", "mi_voldis.bench.strategies", run["out"], name, out] + switch
         wall = child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
         with open(os.path.join(out, "metrics.json")) as f:
             rows[strategy] = {**json.load(f), "wall_seconds": wall, "out": out, "command": "python " + " ".join(args)}

@@ -3,7 +3,9 @@
     python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET] [--set KEY=VALUE ...]
 
 RUN: a finished fit kept with ``--keep-checkpoints``; its final state's full field is reused, the
-background is fitted again with ``bg_strategy=STRATEGY`` (every other setting as RUN's config.json), and
+background is fitted again with ``bg_strategy=STRATEGY`` (the background phase's other settings,
+:data:`BACKGROUND_SETTINGS`, as today's defaults, whatever RUN recorded; every other one as RUN's
+config.json), and
 OUT receives ``metrics.json`` and the background of each held-out view as PNG. Scored on the held-out
 views against the ground-truth background (in-mask = masks dilated by ``hull_dilation``): PSNR inside
 the masks (and there, apart, where some training view sees the background unmasked and where none
@@ -23,6 +25,20 @@ import time
 import numpy as np
 
 PREVIEWS = 4  # held-out views previewed when the dataset has neither ground truth nor masks to score
+
+# settings of the background phase alone (bg_strategy first): a refit takes today's defaults for them, so
+# that a run fitted under older defaults is scored with the background the default command fits now
+BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
+                       "object_front")
+
+
+def refit_config(run, strategy, sets=()):
+    """The settings of a background refit from ``run``: its config.json, the background phase's settings
+    as today's defaults with ``bg_strategy=strategy``, then ``sets`` ("name=value")."""
+    from ..fit.config import FitConfig
+    today = FitConfig()
+    background = {key: getattr(today, key) for key in BACKGROUND_SETTINGS[1:]}
+    return FitConfig.from_sources(os.path.join(run, "config.json"), list(sets), bg_strategy=strategy, **background)
 
 
 def evaluate(ds, integrator, dilation_fraction):
@@ -59,6 +75,10 @@ def evaluate(ds, integrator, dilation_fraction):
     full_out = [psnr(np.clip(renders[v]["full"][0], 0, 1), ds.backgrounds[v], ~dilate(ds.masks[v], dil))
                 for v in scored]
     rows["volume"]["full_psnr_outside"] = float(np.mean(full_out)) if full_out else None
+    # the metric's reference: the ground-truth background itself, warped the same way (a correct but
+    # textured answer loses to a smooth one under nearest-pixel warping with no z-test)
+    rows["volume"]["truth_consistency_psnr"] = consistency(
+        ds, scored, {v: np.clip(ds.backgrounds[v], 0, 1) for v in scored}, depth, dil) if scored else None
     rows["volume"]["seen_share"] = float(np.mean([seen[v].sum() / max(dilate(ds.masks[v], dil).sum(), 1)
                                                   for v in scored])) if scored else None
     truth = {v: ds.coverage[v] > 0.5 if ds.coverage is not None else ds.masks[v] for v in tests}
@@ -73,7 +93,6 @@ def main(argv=None):
     argv = [a for k, a in enumerate(argv) if a != "--set" and (k == 0 or argv[k - 1] != "--set")]
     run, strategy, out = argv[:3]
     from ..data import load_dataset
-    from ..fit.config import FitConfig
     from ..fit.fields import fit_integrator
     from ..fit.state import FitState
     from ..fit.train import fit
@@ -82,7 +101,7 @@ def main(argv=None):
     from ..optim.adam import Adam
     with open(os.path.join(run, "config.json")) as f:
         record = json.load(f)["dataset"]
-    cfg = FitConfig.from_sources(os.path.join(run, "config.json"), [f'bg_strategy="{strategy}"'] + sets)
+    cfg = refit_config(run, strategy, sets)
     ds = load_dataset(record["path"], record["format"], record["holdout"])
     fit_ds = load_dataset(argv[3], record["format"], record["holdout"]) if len(argv) > 3 else ds
     os.makedirs(out, exist_ok=True)
