@@ -22,7 +22,7 @@ def test_run_writes_everything(tiny_run):
     assert not os.path.exists(os.path.join(tiny_run, "checkpoints"))  # a finished run keeps what it made, no more
     assert any(f.endswith("_fg.png") for f in os.listdir(os.path.join(tiny_run, "previews")))
     m = json.load(open(os.path.join(tiny_run, "metrics.json")))
-    for key in ("psnr", "ssim", "bg_psnr", "bg_psnr_mask", "bg_ssim_mask", "fg_iou", "fg_coverage_iou"):
+    for key in ("psnr", "ssim", "bg_psnr", "bg_psnr_mask", "bg_ssim_mask", "fg_coverage_iou", "fg_matte_iou"):
         assert np.isfinite(m["held_out"][key]), key
     assert m["held_out"]["psnr"] > 14  # 60 steps on 32 x 24 images: far from converged, far from noise
     assert m["sh_choice"]["degree"] in (0, 1) and m["sh_degree"] == m["sh_choice"]["degree"]

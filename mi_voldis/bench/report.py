@@ -160,14 +160,14 @@ def _accuracy(results, report_dir):
                    "(" + ", ".join(label for label, _ in images) + ")", ""]
     fits = results["fits"]
     md += ["Disentanglement on the held-out views of each fit (background vs its ground truth, foreground "
-           "coverage IoU at 0.5 vs the exact coverage):", "",
-           "| run | bg PSNR | bg PSNR in mask | bg SSIM in mask | fg alpha IoU | fg coverage IoU | bg phase s |",
+           "coverage sum max(w_fg, 0) and the fg layer's EXR matte, each at 0.5, IoU vs the exact coverage):", "",
+           "| run | bg PSNR | bg PSNR in mask | bg SSIM in mask | fg coverage IoU | fg matte IoU (EXR) | bg phase s |",
            "|---|---|---|---|---|---|---|"]
     for name, f in fits.items():
         h = f["metrics"]["held_out"]
         if "bg_psnr" in h:
             md.append(f"| {name} | {h['bg_psnr']:.2f} | {h['bg_psnr_mask']:.2f} | {h['bg_ssim_mask']:.3f} | "
-                      f"{h['fg_iou']:.3f} | {h['fg_coverage_iou']:.3f} | "
+                      f"{h['fg_coverage_iou']:.3f} | {_f(h.get('fg_matte_iou'), 3)} | "
                       f"{_f(f['metrics']['seconds'].get('phase_bg'), 0)} |")
     return md + [""]
 

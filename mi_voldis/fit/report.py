@@ -27,9 +27,9 @@ def evaluate(ds, integrator, hull_dilation):
             row.update(bg_psnr=psnr(bg, gt), bg_ssim=ssim(bg, gt), bg_psnr_mask=psnr(bg, gt, region),
                        bg_ssim_mask=ssim(bg, gt, region))
         truth = ds.coverage[v] > 0.5 if ds.coverage is not None else ds.masks[v] if ds.masks is not None else None
-        if truth is not None:  # the layer's alpha (alpha_full - alpha_bg) and the object's coverage
-            row["fg_iou"] = iou(out["fg"][1] > 0.5, truth)
+        if truth is not None:  # the object's coverage sum max(w_fg, 0), and the matte the EXR's fg layer carries
             row["fg_coverage_iou"] = iou(out["fg_coverage"] > 0.5, truth)
+            row["fg_matte_iou"] = iou(composite_channels(layer_channels(out))["fg.A"] > 0.5, truth)
         rows.append(row)
     summary = {key: float(np.nanmean([r[key] for r in rows])) for key in rows[0] if key != "view"} if rows else {}
     return summary, rows, renders
