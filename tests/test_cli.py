@@ -70,3 +70,20 @@ def test_a_refit_takes_the_background_settings_of_today_and_the_rest_of_the_run(
                                                                           today.object_alpha)
     assert cfg.steps_bg == today.steps_bg + 7
     assert refit_config(str(tmp_path), "guided", ["object_alpha=0.3"]).object_alpha == 0.3
+
+
+def test_a_refit_of_a_bad_run_or_setting_stops_with_one_line(tmp_path):
+    from mi_voldis.bench.strategies import main
+    out = tmp_path / "out"
+    cases = [([str(tmp_path / "missing"), "guided", str(out)], "missing/config.json: cannot read settings"),
+             ([str(tmp_path), "guided", str(out), "--set", "object_alpha=7"], "--set object_alpha=7: object_alpha"),
+             ([str(tmp_path), "nonsense", str(out)], "bg_strategy"),
+             ([str(tmp_path), "guided", str(out)], "config.json: no dataset record"),
+             ([str(tmp_path)], "usage:")]
+    (tmp_path / "config.json").write_text("{}")
+    for argv, expected in cases:
+        with pytest.raises(SystemExit) as e:
+            main(argv)
+        message = str(e.value)
+        assert expected in message and "\n" not in message, (argv, message)
+    assert not out.exists()  # nothing written

@@ -91,6 +91,9 @@ def main(argv=None):
     argv = list(argv or sys.argv[1:])
     sets = [argv[k + 1] for k, a in enumerate(argv) if a == "--set" and k + 1 < len(argv)]
     argv = [a for k, a in enumerate(argv) if a != "--set" and (k == 0 or argv[k - 1] != "--set")]
+    if len(argv) < 3:
+        raise SystemExit("usage: python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET] "
+                         "[--set KEY=VALUE ...]")
     run, strategy, out = argv[:3]
     from ..data import load_dataset
     from ..fit.fields import fit_integrator
@@ -99,9 +102,14 @@ def main(argv=None):
     from ..io.images import display_to_uint8, write_png
     from ..io.run_folder import peak_rss_mib, write_json
     from ..optim.adam import Adam
+    try:  # the settings first: their errors name the file, the key or the --set item
+        cfg = refit_config(run, strategy, sets)
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
     with open(os.path.join(run, "config.json")) as f:
-        record = json.load(f)["dataset"]
-    cfg = refit_config(run, strategy, sets)
+        record = json.load(f).get("dataset")
+    if not isinstance(record, dict):
+        raise SystemExit(f"error: {os.path.join(run, 'config.json')}: no dataset record (not a fitted run's)")
     ds = load_dataset(record["path"], record["format"], record["holdout"])
     fit_ds = load_dataset(argv[3], record["format"], record["holdout"]) if len(argv) > 3 else ds
     os.makedirs(out, exist_ok=True)
