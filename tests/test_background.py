@@ -312,7 +312,7 @@ def test_removal_leaves_nothing_of_the_object(strategy, tmp_path):
         assert state.prior["vertices_written"] > 0
 
 
-def sphere_seen_unmasked(ds, pts, voxel, centre, radius=0.3):
+def sphere_seen_unmasked(ds, pts, voxel, centre, radius=0.3, grow=1):
     """Per point: some masked training view has it in view outside its mask grown by a pixel, the ray
     to it not through the sphere (analytic visibility on :func:`synthetic_object_scene`)."""
     seen = np.zeros(len(pts), bool)
@@ -321,11 +321,51 @@ def sphere_seen_unmasked(ds, pts, voxel, centre, radius=0.3):
         px, py, z = project(cam, pts)
         ix, iy = np.floor(px).astype(int), np.floor(py).astype(int)
         ok = (z > 0) & (ix >= 0) & (ix < cam.width) & (iy >= 0) & (iy < cam.height)
-        ok[ok] &= ~dilate(ds.masks[v], 1)[iy[ok], ix[ok]]
+        ok[ok] &= ~dilate(ds.masks[v], grow)[iy[ok], ix[ok]]
         o = np.broadcast_to(cam.to_world[:3, 3], pts.shape)
         dist = np.linalg.norm(pts - o, axis=1)
         seen |= ok & ~(sphere_hit(o, (pts - o) / dist[:, None], centre, radius) < dist - voxel)
     return seen
+
+
+def guided_removal(tmp_path, **settings):
+    """The synthetic sphere's full field and the inputs and state after the guided background refit."""
+    from mi_voldis.fit.train import fit
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
+    cfg = cfg.replace(bg_strategy="guided", steps_bg=30, **settings)
+    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, cfg.adam_beta1, cfg.adam_beta2),
+                     fields={"full": full})
+    state.schedule, state.steps_full = [[0, 40]], 1
+    checkpoint = str(tmp_path / "state.npz")
+    state.save(checkpoint, "bg", 0)
+    return (ds, full) + fit(ds, checkpoint, cfg, resume=True, progress=False)
+
+
+def test_what_some_view_sees_keeps_the_full_fields_density_so_the_foreground_is_the_object_alone(tmp_path):
+    """With ``keep_seen`` (the default) the guided refit leaves the full field's density at every vertex
+    a training view sees unmasked (analytically: above the floor, outside the view's mask grown by 3
+    pixels, the way to it not through the sphere), so on the training views away from the masks the
+    foreground coverage sum max(w_fg, 0) is nil (above 0.1 on under 1% of those pixels); the harmonic
+    fill without it reshapes those vertices and the coverage spills there."""
+    from mi_voldis.field_state import density_of
+    from mi_voldis.fit.fields import fit_integrator
+    voxel, centre = 2.0 / 39, np.array([0.0, FLOOR_Y + 0.3, 0.0])
+    results = {}
+    for keep in (True, False):
+        ds, full, inputs, state = guided_removal(tmp_path / str(keep), keep_seen=keep)
+        pts, real = vertex_positions(full)
+        seen = real & (pts[:, 1] > FLOOR_Y + 0.5 * voxel) & sphere_seen_unmasked(ds, pts, voxel, centre, grow=3)
+        changed = np.abs(density_of(state.fields["bg"]) - density_of(full))[seen]
+        integ = fit_integrator(inputs, state)
+        spill = [render_camera(integ, ds.cameras[v], ("fg",))["fg_coverage"][~dilate(ds.masks[v], 3)]
+                 for v in ds.masked_train]
+        results[keep] = changed, np.concatenate(spill)
+    changed, spill = results[True]
+    assert len(changed) > 1000 and changed.max() == 0.0
+    assert spill.mean() < 0.005 and (spill > 0.1).mean() < 0.01
+    changed, spill = results[False]
+    assert (changed > 0.5).sum() > 100
+    assert spill.mean() > 0.05 and (spill > 0.1).mean() > 0.1
 
 
 def object_cells(tmp_path, **settings):
@@ -334,7 +374,7 @@ def object_cells(tmp_path, **settings):
     cfg = cfg.replace(**settings)
     state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, 0.9, 0.99), fields={"full": full})
     inputs = FitInputs.of(ds, cfg, str(tmp_path / "state.npz"), False)
-    hull, _, obj = background_regions(inputs, state)
+    hull, _, obj, _ = background_regions(inputs, state)
     pts, real = vertex_positions(full)
     return ds, cfg, np.array(hull) > 0, np.array(obj), pts, real
 

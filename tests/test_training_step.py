@@ -68,7 +68,8 @@ def test_adam_zero_rate_slots_stay_put():
 
 def test_packed_regularisers_match_the_tensor_formulas():
     """On a brick grid with every brick allocated: sparsity on density, TV on every channel group with its
-    own weight (the dense formula on each tensor), the hull mask, padding and the empty brick untouched."""
+    own weight (the dense formula on each tensor), the hull mask and the density's own mask within it,
+    padding and the empty brick untouched."""
     rng = np.random.default_rng(3)
     d, c = rng.normal(0, 1, (5, 6, 7, 1)).astype(np.float32), rng.normal(0, 1, (5, 6, 7, 12)).astype(np.float32)
     field = mi.load_dict(brick_field_dict(d, c, brick=4))
@@ -77,8 +78,10 @@ def test_packed_regularisers_match_the_tensor_formulas():
     params = PackedParameters({"full": field})
     coords, inside = layout.vertex_coords()
     keep = (np.arange(field.layout.slots * b3) % 3 != 0).astype(np.float32)
+    shaped = (np.arange(field.layout.slots * b3) % 2 != 0).astype(np.float32)
     state = field_state.FieldState(layout, field.packed, 13, np.eye(4))
     fake = SimpleNamespace(inputs=SimpleNamespace(cfg=cfg), roles=("full",), params=params, hull=mi.Float(keep),
+                           density_hull=mi.Float(shaped),
                            integrator=SimpleNamespace(fields={"full": field}), neighbours={},
                            state=SimpleNamespace(fields={"full": state}))
     grads = FieldFit.extra_gradients(fake, 4, {"full.packed": dr.zeros(mi.Float, dr.width(field.packed))})
@@ -99,7 +102,9 @@ def test_packed_regularisers_match_the_tensor_formulas():
     want_d = (cfg.sparsity / stored) / (1 + np.exp(-td)) + 2 * cfg.tv_density * 16 * dense_tv(td) / (stored * 16)
     want_c = 2 * cfg.tv_color * 16 / 12 * dense_tv(tc) / (stored * 16)
     mask = bricks.to_dense(np.repeat(keep, 16), layout, 16)[..., 0]
-    np.testing.assert_allclose(got[..., 0], want_d * mask, rtol=1e-4, atol=1e-8)
+    density_mask = mask * bricks.to_dense(np.repeat(shaped, 16), layout, 16)[..., 0]
+    assert 0 < density_mask.sum() < mask.sum()
+    np.testing.assert_allclose(got[..., 0], want_d * density_mask, rtol=1e-4, atol=1e-8)
     np.testing.assert_allclose(got[..., 1:13], want_c * mask[..., None], rtol=1e-4, atol=1e-8)
     packed = np.array(grads["full.packed"]).reshape(-1, 16)
     assert not packed[:, 13:].any() and not packed[:b3].any()  # padding and the empty brick

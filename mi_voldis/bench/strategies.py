@@ -29,7 +29,7 @@ PREVIEWS = 4  # held-out views previewed when the dataset has neither ground tru
 # settings of the background phase alone (bg_strategy first): a refit takes today's defaults for them, so
 # that a run fitted under older defaults is scored with the background the default command fits now
 BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
-                       "object_front")
+                       "object_front", "keep_seen")
 
 
 def refit_config(run, strategy, sets=()):

@@ -78,13 +78,16 @@ def start_harmonic(inputs, state):
     extension of density and colour, so surfaces the object hides (the floor under it) continue
     through the hull, except in the object's own voxels (:func:`background_regions`), whose density
     is emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view sees.
-    Returns the hull and the object's voxels (:func:`background_regions`)."""
+    With ``keep_seen`` only the hull voxels no training view sees unmasked are inpainted; the others keep
+    the full field's values (the fill's boundary). Returns the hull, the object's voxels and the hull
+    voxels no view sees unmasked (:func:`background_regions`)."""
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
-    hull, points, obj = background_regions(inputs, state, neighbours)
+    hull, points, obj, unseen = background_regions(inputs, state, neighbours)
     empty = density_raw_for_alpha(inputs.cfg.density_init_alpha, voxel_of(full) * inputs.cfg.step_voxels,
                                   full.density_scale)
-    values = harmonic_fill(full.data, full.width, hull, neighbours)
+    values = harmonic_fill(full.data, full.width, dr.select(unseen, hull, 0.0) if inputs.cfg.keep_seen else hull,
+                           neighbours)
     channel = dr.arange(mi.UInt32, dr.width(values)) % full.width
     # the object itself: empty, its colour the fill's (colour is interpolated before its activation, so
     # black beside the floor under the object would darken it; black where a whole neighbourhood is
@@ -92,7 +95,7 @@ def start_harmonic(inputs, state):
     values = dr.select(dr.repeat(obj, full.width) & (channel == 0), empty, values)
     state.fields["bg"] = FieldState(full.layout, values, full.channels, full.to_world.copy(), full.density_scale)
     state.hull_points = points
-    return hull, obj
+    return hull, obj, unseen
 
 
 def voxel_of(field):
@@ -100,8 +103,9 @@ def voxel_of(field):
 
 
 def background_regions(inputs, state, neighbours=None):
-    """The visual hull (Float per stored vertex), its vertices' positions, and the object's own voxels
-    (Bool): hull vertices that no training view sees unmasked (:func:`never_seen`) and that either hold
+    """The visual hull (Float per stored vertex), its vertices' positions, the object's own voxels
+    (Bool) and the hull vertices no training view sees unmasked (Bool, :func:`never_seen`). The
+    object's voxels are unseen hull vertices that either hold
     the object's density where a masked ray can show it (full-field opacity per voxel above
     ``object_alpha``, transmittance on some masked ray at least 5%) or, with ``object_front``, lie just
     in front of it on a masked ray (:func:`masked_ray_cells`). The walls and floor around the object
@@ -117,7 +121,8 @@ def background_regions(inputs, state, neighbours=None):
     candidates = (raw > density_raw_for_alpha(cfg.object_alpha, voxel_of(full), full.density_scale)) & shown
     if cfg.object_front:
         candidates |= front
-    return hull, points, never_seen(inputs, full, (hull > 0) & candidates, training_depths(inputs, state, median=True))
+    unseen = never_seen(inputs, full, hull > 0, training_depths(inputs, state, median=True))
+    return hull, points, unseen & candidates, unseen
 
 
 def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chunk=1 << 16):

@@ -32,12 +32,14 @@ def psnr_of(mse):
 class FieldFit:
     """One fitting phase: the fields of ``roles`` fitted through ``layers`` to rays of ``bank``
     (``pool``: flat pixel indices to draw from), their updates masked to ``hull`` (a Float per stored
-    vertex) when given; ``schedule``: follow the resolution schedule and start empty-space skipping."""
+    vertex) when given, the density's to ``density_hull`` if given too; ``schedule``: follow the
+    resolution schedule and start empty-space skipping."""
 
     def __init__(self, inputs, state, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
-                 rates=None, fit_exposure=False, prior=None):
+                 rates=None, fit_exposure=False, prior=None, density_hull=None):
         self.inputs, self.state, self.roles, self.layers, self.bank = inputs, state, roles, layers, bank
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
+        self.density_hull = density_hull
         self.prior = prior  # (RayBank, pool): the guided background's 2D colour prior (mi_voldis.fit.guide)
         self.fit_exposure = fit_exposure and state.exposure is not None
         self.adam = state.adam if adam is None else adam
@@ -168,5 +170,7 @@ class FieldFit:
                 g = g + weight * tv_gradient(values, f.width, self.neighbours[r])
             if self.hull is not None:  # refit only inside the hull
                 g = g * dr.repeat(self.hull, f.width)
+                if self.density_hull is not None:
+                    g = dr.select(channel == 0, g * dr.repeat(self.density_hull, f.width), g)
             grads[key] = g
         return grads

@@ -14,7 +14,8 @@ Phases (``bg_strategy``):
   ``object_front``, just before them on a masked ray) emptied
   (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull cells are refitted with L_bg on
   rays near the masks. Outside the hull the two fields are identical, so the foreground
-  w_full - w_bg is exactly zero there.
+  w_full - w_bg is exactly zero there; with ``keep_seen`` (default) so it is in the hull voxels some
+  training view sees unmasked, which keep the full field's density (their colour is refitted).
 * ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
   training view (each view's photo inpainted in its mask, occluders in front of the object left out of
   the inpainting's sources; weight ``prior_weight`` against 1 for L_bg, :mod:`mi_voldis.fit.guide`):
@@ -118,15 +119,21 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
                                           cfg.prior_views, fill=inpainter or cfg.prior_inpainter)
                 state.prior.update(lifted)
                 state.prior_keys = np.union1d(state.prior_keys, keys)
+        shaped = None  # where the density may change, if not wherever the colour may
         if harmonic:  # the object's own voxels stay empty
-            hull, obj = regions or background_regions(inputs, state)[::2]
+            if regions is None:
+                hull, _, obj, unseen = background_regions(inputs, state)
+            else:
+                hull, obj, unseen = regions
             free = dr.select(obj, 0.0, hull)
+            if cfg.keep_seen:  # what some view sees keeps the full field's density
+                shaped = dr.select(unseen, free, 0.0)
         else:  # on the background's lattice (the lifted prior may have allocated bricks)
             free = cleared_region(inputs, state)
         pool = background_ray_pool(dataset, inputs.bank, cfg.bg_ray_dilation)
         prior = colour_prior(inputs, state, inpainter or cfg.prior_inpainter) if cfg.bg_strategy == "guided" else None
         problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
-                           schedule=False, prior=prior)
+                           schedule=False, prior=prior, density_hull=shaped)
         optimize(problem, state.adam, steps=cfg.steps_bg, start=state.step, final_ratio=cfg.lr_final_ratio,
                  log=state.log, desc="bg refit", checkpoint=checkpoint_at("bg")(problem),
                  checkpoint_every=cfg.checkpoint_every, progress=progress)
