@@ -562,3 +562,22 @@ def test_consistency_of_a_textured_floor_is_high_with_its_true_depth_and_drops_w
     wrong = consistency(ds, [0, 1], images, {v: 1.3 * d for v, d in depth.items()}, 0)
     assert exact > 30.0
     assert wrong < exact - 8.0
+
+
+def test_the_removal_score_rates_the_foreground_matte_against_the_masks_on_a_capture(tmp_path):
+    """The benchmark's removal score gives the foreground's IoU (coverage and EXR matte) against the
+    exact coverage where there is ground truth, and against the masks on a capture without it (the
+    same views, the same figures here: the synthetic scene's coverage is its masks); the sphere's
+    foreground matches its masks."""
+    import dataclasses
+
+    from mi_voldis.bench.strategies import evaluate
+    from mi_voldis.fit.fields import fit_integrator
+    ds, _, inputs, state = guided_removal(tmp_path)
+    integ = fit_integrator(inputs, state)
+    truth, _ = evaluate(dataclasses.replace(ds, coverage=ds.masks.astype(np.float32)), integ, 0.03)
+    capture, _ = evaluate(dataclasses.replace(ds, backgrounds=None), integ, 0.03)
+    assert capture["volume"]["psnr_mask"] is None and capture["volume"]["consistency_psnr"] is not None
+    for key in ("fg_coverage_iou", "fg_matte_iou"):
+        assert truth["volume"][key] > 0.8
+        assert capture["volume"][key] == pytest.approx(truth["volume"][key], abs=1e-6)

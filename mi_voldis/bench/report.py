@@ -261,14 +261,18 @@ def write_removal(results, report_dir, command):
                f"Full field: held-out PSNR {m['held_out']['psnr']:.2f} dB, fit {m['seconds']['fit']:.0f} s. "
                "The previous default (`harmonic`), the default and its variant (`STRATEGY-SETTING`: with that "
                "setting off), with the view-to-view consistency on every held-out view (PSNR inside the dilated "
-               "masks; no ground truth to score against).", "",
-               "| method | consistency | bg seconds |", "|---|---|---|"]
+               "masks; no ground truth to score against) and the foreground against the capture's masks (IoU "
+               "of the coverage sum max(w_fg, 0) and of the EXR fg layer's matte, each at 0.5).", "",
+               "| method | consistency | fg coverage IoU (masks) | fg matte IoU (masks) | bg seconds |",
+               "|---|---|---|---|---|"]
         base = None
         for strategy, row in entry["strategies"].items():
             base = row["methods"]
-            md.append(f"| {strategy} | {_f(base['volume']['consistency_psnr'], 2)} | {row['seconds']:.0f} |")
+            v = base["volume"]
+            md.append(f"| {strategy} | {_f(v['consistency_psnr'], 2)} | {_f(v.get('fg_coverage_iou'), 2)} | "
+                      f"{_f(v.get('fg_matte_iou'), 2)} | {row['seconds']:.0f} |")
         for name in _baselines(base):
-            md.append(f"| {BASELINES.get(name, name)} | {_f(base[name]['consistency_psnr'], 2)} | - |")
+            md.append(f"| {BASELINES.get(name, name)} | {_f(base[name]['consistency_psnr'], 2)} | - | - | - |")
         sheet = _removal_sheet(entry["fit"]["out"], entry["strategies"],
                                os.path.join(report_dir, f"removal_{capture}.png"), views=None)
         if sheet:

@@ -10,7 +10,8 @@ OUT receives ``metrics.json`` and the background of each held-out view as PNG. S
 views against the ground-truth background (in-mask = masks dilated by ``hull_dilation``): PSNR inside
 the masks (and there, apart, where some training view sees the background unmasked and where none
 does: :mod:`mi_voldis.bench.visible`) and outside them (beside the full field's outside them), the
-object's residue, the foreground coverage IoU and the view-to-view consistency; the 2D inpainters of
+object's residue, the foreground's IoU (its coverage and its EXR matte; on a capture without ground
+truth against its masks) and the view-to-view consistency; the 2D inpainters of
 :data:`~mi_voldis.inpaint2d.BASELINES` on each held-out view itself (they see the photo around the
 mask) beside them. MASKED_DATASET: fit the
 background with that copy of RUN's dataset (other object masks, e.g. from scripts/make_masks.py);
@@ -43,9 +44,10 @@ def refit_config(run, strategy, sets=()):
 
 def evaluate(ds, integrator, dilation_fraction):
     """Per-method rows (the volume's background, then each 2D baseline) and the volume's held-out renders."""
+    from ..compositing import composite_channels
     from ..inpaint2d import BASELINES, inpainter
     from ..metrics import dilate, iou, object_residue, psnr
-    from ..render.views import render_camera
+    from ..render.views import layer_channels, render_camera
     from ..tasks.removal import consistency
     from .visible import seen_pixels, training_surfaces
     dil = int(np.ceil(dilation_fraction * np.hypot(*ds.size)))
@@ -81,9 +83,12 @@ def evaluate(ds, integrator, dilation_fraction):
         ds, scored, {v: np.clip(ds.backgrounds[v], 0, 1) for v in scored}, depth, dil) if scored else None
     rows["volume"]["seen_share"] = float(np.mean([seen[v].sum() / max(dilate(ds.masks[v], dil).sum(), 1)
                                                   for v in scored])) if scored else None
+    # the foreground against the exact coverage, or on a capture against its masks: the coverage
+    # sum max(w_fg, 0) and the matte the EXR's fg layer carries (what a compositor gets)
     truth = {v: ds.coverage[v] > 0.5 if ds.coverage is not None else ds.masks[v] for v in tests}
-    rows["volume"]["fg_coverage_iou"] = float(np.mean([iou(renders[v]["fg_coverage"] > 0.5, truth[v])
-                                                       for v in scored])) if scored else None
+    mattes = {v: composite_channels(layer_channels(renders[v], main="full"))["fg.A"] for v in tests}
+    for key, layer in (("fg_coverage_iou", {v: renders[v]["fg_coverage"] for v in tests}), ("fg_matte_iou", mattes)):
+        rows["volume"][key] = float(np.mean([iou(layer[v] > 0.5, truth[v]) for v in tests])) if tests else None
     return rows, renders
 
 
