@@ -176,7 +176,7 @@ def save_results(results, report_dir, name):
     return results
 
 
-# on captures without ground truth: the previous default, the default and its variant
+# on captures without ground truth: the previous default, the default and its variants
 CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-object_front", "guided-keep_seen"]
 REMOVAL_CAPTURES = ["statue"]  # captures with object masks (../shared/data; skipped when absent)
 
