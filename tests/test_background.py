@@ -342,7 +342,7 @@ def guided_removal(tmp_path, **settings):
 
 
 def test_what_some_view_sees_keeps_the_full_fields_density_so_the_foreground_is_the_object_alone(tmp_path):
-    """With ``keep_seen`` (the default) the guided refit leaves the full field's density at every vertex
+    """With ``keep_seen`` the guided refit leaves the full field's density at every vertex
     a training view sees unmasked (analytically: above the floor, outside the view's mask grown by 3
     pixels, the way to it not through the sphere), so on the training views away from the masks the
     foreground coverage sum max(w_fg, 0) is nil (above 0.1 on under 1% of those pixels); the harmonic
@@ -567,13 +567,13 @@ def test_consistency_of_a_textured_floor_is_high_with_its_true_depth_and_drops_w
 def test_the_removal_score_rates_the_foreground_matte_against_the_masks_on_a_capture(tmp_path):
     """The benchmark's removal score gives the foreground's IoU (coverage and EXR matte) against the
     exact coverage where there is ground truth, and against the masks on a capture without it (the
-    same views, the same figures here: the synthetic scene's coverage is its masks); the sphere's
-    foreground matches its masks."""
+    same views, the same figures here: the synthetic scene's coverage is its masks); with ``keep_seen``
+    the sphere's foreground matches its masks."""
     import dataclasses
 
     from mi_voldis.bench.strategies import evaluate
     from mi_voldis.fit.fields import fit_integrator
-    ds, _, inputs, state = guided_removal(tmp_path)
+    ds, _, inputs, state = guided_removal(tmp_path, keep_seen=True)
     integ = fit_integrator(inputs, state)
     truth, _ = evaluate(dataclasses.replace(ds, coverage=ds.masks.astype(np.float32)), integ, 0.03)
     capture, _ = evaluate(dataclasses.replace(ds, backgrounds=None), integ, 0.03)

@@ -159,10 +159,11 @@ class FitConfig(Settings):
                                        "masked ray (nothing but the object stands there) that no training view "
                                        "sees unmasked are the object too, however faint: the prior cannot paint "
                                        "the background over the object, so the foreground layer covers it whole")
-    keep_seen: bool = setting(True, "hull voxels some training view sees unmasked keep the full field's density "
-                                    "in bg (their colour is refitted; only the unseen voxels are filled and "
-                                    "reshaped): outside the object the two fields' weights agree, so the "
-                                    "foreground layer w_fg = w_full - w_bg holds the object alone")
+    keep_seen: bool = setting(False, "hull voxels some training view sees unmasked keep the full field's density "
+                                     "in bg (their colour is refitted; only the unseen voxels are filled and "
+                                     "reshaped): outside the object the two fields' weights agree, so the "
+                                     "foreground layer w_fg = w_full - w_bg holds the object alone; but the "
+                                     "object's shadow and soft edge stay in the background with that geometry")
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)

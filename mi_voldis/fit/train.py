@@ -14,7 +14,7 @@ Phases (``bg_strategy``):
   ``object_front``, just before them on a masked ray) emptied
   (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull cells are refitted with L_bg on
   rays near the masks. Outside the hull the two fields are identical, so the foreground
-  w_full - w_bg is exactly zero there; with ``keep_seen`` (default) so it is in the hull voxels some
+  w_full - w_bg is exactly zero there; with ``keep_seen`` so it is in the hull voxels some
   training view sees unmasked, which keep the full field's density (their colour is refitted).
 * ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
   training view (each view's photo inpainted in its mask, occluders in front of the object left out of
