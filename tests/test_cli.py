@@ -54,6 +54,17 @@ def test_a_removal_bench_row_names_its_strategy_and_the_boolean_setting_it_switc
         strategy_switch("guided object_front")
 
 
+def test_the_benchmark_names_each_real_capture_it_skips(tmp_path, monkeypatch, capsys):
+    """Captures come from SHARED ($MI_VOLDIS_CAPTURES or ../shared/data); one that is not there is
+    skipped with a line naming the folder it looked for."""
+    from mi_voldis.bench import run
+    (tmp_path / "statue").mkdir()
+    monkeypatch.setattr(run, "SHARED", str(tmp_path))
+    assert run.present(["fern", "statue", "garden"], scenes=["statue", "fern"]) == ["statue"]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"bench: skipping fern: no {tmp_path / 'fern'} (set MI_VOLDIS_CAPTURES)"]
+
+
 def test_a_refit_takes_the_background_settings_of_today_and_the_rest_of_the_run(tmp_path):
     """A run fitted under older background defaults is refitted with today's (the bench and the hand
     command agree); its other settings stay, and --set still wins."""

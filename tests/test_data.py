@@ -15,7 +15,8 @@ from mi_voldis.data.llff import write_llff
 from mi_voldis.space import SceneSpace
 from mi_voldis.synth.rigs import look_at
 
-SHARED = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data")
+# the real captures: $MI_VOLDIS_CAPTURES, else ../shared/data beside the checkout (as scripts/bench.py)
+SHARED = os.environ.get("MI_VOLDIS_CAPTURES") or os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -248,7 +249,7 @@ def test_transforms_errors(tmp_path, breakage, message, culprit):
 
 
 # ------------------------------------------------------------------------------------- real data
-@pytest.mark.skipif(not os.path.isdir(SHARED), reason="shared captures not present")
+@pytest.mark.skipif(not os.path.isdir(SHARED), reason=f"real captures not present at {SHARED} (set MI_VOLDIS_CAPTURES)")
 @pytest.mark.parametrize("name, views, size, has_masks, kind", [
     ("fern", 20, (378, 504), False, "ndc"), ("statue", 29, (378, 504), True, "ndc"),
     ("lego_200", 200, (200, 200), False, "world")])

@@ -259,10 +259,11 @@ def write_removal(results, report_dir, command):
         m = entry["fit"]["metrics"]
         md += [f"## {capture} (a capture: no ground truth)", "",
                f"Full field: held-out PSNR {m['held_out']['psnr']:.2f} dB, fit {m['seconds']['fit']:.0f} s. "
-               "The previous default (`harmonic`), the default and its variants (`STRATEGY-SETTING`: with that "
-               "setting off), with the view-to-view consistency on every held-out view (PSNR inside the dilated "
-               "masks; no ground truth to score against) and the foreground against the capture's masks (IoU "
-               "of the coverage sum max(w_fg, 0) and of the EXR fg layer's matte, each at 0.5).", "",
+               "The previous default (`harmonic`), the default and its variants (`STRATEGY+SETTING` / "
+               "`STRATEGY-SETTING`: with that setting on / off), with the view-to-view consistency on every "
+               "held-out view (PSNR inside the dilated masks; no ground truth to score against) and the "
+               "foreground against the capture's masks (IoU of the coverage sum max(w_fg, 0) and of the EXR "
+               "fg layer's matte, each at 0.5).", "",
                "| method | consistency | fg coverage IoU (masks) | fg matte IoU (masks) | bg seconds |",
                "|---|---|---|---|---|"]
         base = None

@@ -25,7 +25,18 @@ from . import content, machine, rays, throughput
 from .strategies import BACKGROUND_SETTINGS
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SHARED = os.path.join(os.path.dirname(ROOT), "shared", "data")
+# the real captures (README's data): $MI_VOLDIS_CAPTURES, else ../shared/data beside the checkout
+SHARED = os.environ.get("MI_VOLDIS_CAPTURES") or os.path.join(os.path.dirname(ROOT), "shared", "data")
+
+
+def present(captures, scenes=None):
+    """The real captures of ``captures`` (among ``scenes`` if given) found in SHARED; each one missing is
+    named on stderr, as the benchmark then skips it."""
+    wanted = [c for c in captures if not scenes or c in scenes]
+    for c in wanted:
+        if not os.path.isdir(os.path.join(SHARED, c)):
+            print(f"bench: skipping {c}: no {os.path.join(SHARED, c)} (set MI_VOLDIS_CAPTURES)", file=sys.stderr)
+    return [c for c in wanted if os.path.isdir(os.path.join(SHARED, c))]
 
 
 def child(args, log_file=None):
@@ -190,10 +201,8 @@ def run_removal(work, report_dir, scenes=None):
         results["scenes"][scene] = {"fit": run, "strategies": strategy_rows(work, scene, run, STRATEGIES, logs)}
     t0, logs = time.perf_counter(), os.path.join(work, "logs")
     results["captures"] = {}
-    for capture in [c for c in REMOVAL_CAPTURES if not scenes or c in scenes]:
+    for capture in present(REMOVAL_CAPTURES, scenes):
         path = os.path.join(SHARED, capture)
-        if not os.path.isdir(path):
-            continue
         run = fit(path, os.path.join(work, "runs", f"{capture}_0"), [], logs, keep=True)
         results["captures"][capture] = {"fit": run,
                                         "strategies": strategy_rows(work, capture, run, CAPTURE_STRATEGIES, logs)}
@@ -276,7 +285,7 @@ def run_all(quick, work, report_dir, scenes=None):
                 for scene in (SCENES[:1] if quick else SCENES)
                 if not scenes or scene in scenes}
     if not quick:
-        datasets.update({c: os.path.join(SHARED, c) for c in CAPTURES if os.path.isdir(os.path.join(SHARED, c))})
+        datasets.update({c: os.path.join(SHARED, c) for c in present(CAPTURES, scenes)})
     if scenes:
         datasets = {k: v for k, v in datasets.items() if k in scenes}
     for scene, path in datasets.items():

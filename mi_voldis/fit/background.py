@@ -1,6 +1,6 @@
-"""How the background field starts from the full one: the object's visual hull cleared (``clear``,
-``lift``) or inpainted from around it (``harmonic``), before the refit on rays near the masks; and its
-colour cleared where nothing reads it."""
+"""How the background field starts from the full one: the part of the object's visual hull no training
+view sees unmasked cleared (``clear``, ``lift``) or the hull inpainted from around it (``harmonic``,
+``guided``), before the refit on rays near the masks; and its colour cleared where nothing reads it."""
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -31,7 +31,7 @@ def hull_region(inputs, field, neighbours):
 
 def start_cleared(inputs, state):
     """Background = full field with the hull cells no training view sees unmasked emptied (no density,
-    black; :func:`never_seen`) and the vertices only the object can occupy
+    their colour kept: :func:`emptied`; :func:`never_seen`) and the vertices only the object can occupy
     (:func:`~mi_voldis.fit.lift.object_ray_keys`: the haze a fit leaves around it, beyond the hull):
     what any view sees stays. L_bg then refits the (grown) hull on rays near the masks. Returns the
     lattice keys of the vertices emptied on the masked rays."""
@@ -84,16 +84,11 @@ def start_harmonic(inputs, state):
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
     hull, points, obj, unseen = background_regions(inputs, state, neighbours)
-    empty = density_raw_for_alpha(inputs.cfg.density_init_alpha, voxel_of(full) * inputs.cfg.step_voxels,
-                                  full.density_scale)
     values = harmonic_fill(full.data, full.width, dr.select(unseen, hull, 0.0) if inputs.cfg.keep_seen else hull,
                            neighbours)
-    channel = dr.arange(mi.UInt32, dr.width(values)) % full.width
-    # the object itself: empty, its colour the fill's (colour is interpolated before its activation, so
-    # black beside the floor under the object would darken it; black where a whole neighbourhood is
-    # empty, c_fg = c_full, comes at the end of the fit: clear_empty_background_color)
-    values = dr.select(dr.repeat(obj, full.width) & (channel == 0), empty, values)
-    state.fields["bg"] = FieldState(full.layout, values, full.channels, full.to_world.copy(), full.density_scale)
+    # the object itself: empty, its colour the fill's (:func:`emptied`)
+    filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
+    state.fields["bg"] = emptied(inputs, filled, obj)
     state.hull_points = points
     return hull, obj, unseen
 

@@ -153,17 +153,19 @@ class FitConfig(Settings):
     bg_ray_dilation: float = setting(0.15, "refit rays come from masks dilated by this fraction of the "
                                            "diagonal", low=0, high=1)
     object_alpha: float = setting(0.2, "hull voxels this opaque in the full field that no training view sees "
-                                       "unmasked are the object: emptied in bg (bg_strategy 'harmonic', "
-                                       "'guided')", above=0, high=1)
+                                       "unmasked and some masked ray shows (transmittance >= 5%) are the "
+                                       "object: emptied in bg (bg_strategy 'harmonic', 'guided')", above=0, high=1)
     object_front: bool = setting(True, "hull voxels within two voxels before the full field's median point on a "
                                        "masked ray (nothing but the object stands there) that no training view "
                                        "sees unmasked are the object too, however faint: the prior cannot paint "
-                                       "the background over the object, so the foreground layer covers it whole")
+                                       "the background over the object, so the foreground layer covers it whole "
+                                       "(bg_strategy 'harmonic', 'guided')")
     keep_seen: bool = setting(False, "hull voxels some training view sees unmasked keep the full field's density "
                                      "in bg (their colour is refitted; only the unseen voxels are filled and "
-                                     "reshaped): outside the object the two fields' weights agree, so the "
-                                     "foreground layer w_fg = w_full - w_bg holds the object alone; but the "
-                                     "object's shadow and soft edge stay in the background with that geometry")
+                                     "reshaped; bg_strategy 'harmonic', 'guided'): outside the object the two "
+                                     "fields' densities agree, so the foreground layer w_fg = w_full - w_bg "
+                                     "holds the object alone; but the object's shadow and soft edge stay in the "
+                                     "background with that geometry")
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)

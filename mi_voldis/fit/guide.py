@@ -15,7 +15,7 @@ some view does see it, that view's unmasked rays (weight 1 against ``lambda``) d
 An occluder in front of the object is no source for the inpainting: ring pixels around the mask whose
 full-field surface lies nearer than ``nearer`` times the object's (the median of its median depths)
 join the 2D hole, so the fill continues the surfaces behind the object, not the occluder's colour
-(:func:`inpainting_hole`). The prior's weight applies on the mask alone.
+(:func:`inpainting_hole`). The prior's weight applies on the grown mask alone, not on that ring.
 """
 import dataclasses
 

@@ -19,7 +19,6 @@ import mitsuba as mi
 import numpy as np
 
 from ..activations import logit
-from ..bricks import EMPTY_COLOR
 from ..cameras import pixel_rays
 from ..device import from_numpy
 from ..field_state import FieldState, density_raw_for_alpha, resample
@@ -148,16 +147,6 @@ def object_ray_keys(inputs, field, views, depth, dilation=0.01, reach=0.9, fract
         behind = fill_disparity(depth[u], region, camera=ds.cameras[u]).reshape(-1)[pixels]
         keys.append(ray_keys(field, inputs.space, ds.cameras[u], pixels, reach * behind, objectish))
     return np.unique(np.concatenate(keys))
-
-
-def empty_keys(field, keys, empty_raw):
-    """``field`` with the vertices of lattice ``keys`` emptied (raw density ``empty_raw``, black)."""
-    inside = dr.repeat(keys_mask(field, keys), field.width)
-    channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
-    data = dr.select(inside & (channel == 0), empty_raw,
-                     dr.select(inside & (channel > 0) & (channel < field.channels), EMPTY_COLOR, field.data))
-    dr.eval(data)
-    return FieldState(field.layout, data, field.channels, field.to_world, field.density_scale)
 
 
 def training_depths(inputs, state, count=24, extra=(), median=False):

@@ -45,7 +45,6 @@ class FieldFit:
         self.adam = state.adam if adam is None else adam
         cfg = inputs.cfg
         self.rates = (cfg.lr_density, cfg.lr_color) if rates is None else rates  # (density, colour)
-        self.neighbours = {}
         self.on_stage = None  # called with the step at each later stage's start (before the fields are refined)
         # and every REPLAN_EVERY steps: the schedule may be rescaled there
         self.rebuild(resume=True)

@@ -13,18 +13,19 @@ Phases (``bg_strategy``):
   object's own voxels (unseen unmasked, and dense where a masked ray can show them or, with
   ``object_front``, just before them on a masked ray) emptied
   (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull cells are refitted with L_bg on
-  rays near the masks. Outside the hull the two fields are identical, so the foreground
-  w_full - w_bg is exactly zero there; with ``keep_seen`` so it is in the hull voxels some
-  training view sees unmasked, which keep the full field's density (their colour is refitted).
+  rays near the masks. Outside the hull the two fields' densities are identical, so on a ray the
+  foreground w_full - w_bg is exactly zero until it reaches the hull; with ``keep_seen`` the hull
+  voxels some training view sees unmasked keep the full field's density too (their colour is refitted).
 * ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
   training view (each view's photo inpainted in its mask, occluders in front of the object left out of
   the inpainting's sources; weight ``prior_weight`` against 1 for L_bg, :mod:`mi_voldis.fit.guide`):
   what no view sees becomes the views' consensus instead of the harmonic fill's blend.
-* ``lift``: the same full field; the background starts as a copy of it with the object's
-  visual hull (from the masks) emptied, only hull cells are refitted with L_bg on rays near the masks
-  (what other views see), and what no view sees is filled from a reference view's 2D inpainting
-  lifted into 3D (:mod:`mi_voldis.fit.lift`), after emptying what only the object can occupy.
-* ``clear``: the hull emptied and refitted, without the prior (the paper's masked loss alone).
+* ``lift``: the same full field; the background starts as a copy of it with the part of the object's
+  visual hull (from the masks) no training view sees unmasked emptied, only hull cells are refitted
+  with L_bg on rays near the masks (what other views see), and what no view sees is filled from a
+  reference view's 2D inpainting lifted into 3D (:mod:`mi_voldis.fit.lift`), after emptying what only
+  the object can occupy.
+* ``clear``: the hull's unseen part emptied and the hull refitted, without the prior (the paper's masked loss alone).
 * ``scratch``: both fields from scratch, jointly, on the same rays (two layers of one march).
 
 Where the background has no density its colour is unconstrained, yet c_fg = c_full - c_bg reads it;
@@ -131,7 +132,8 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         else:  # on the background's lattice (the lifted prior may have allocated bricks)
             free = cleared_region(inputs, state)
         pool = background_ray_pool(dataset, inputs.bank, cfg.bg_ray_dilation)
-        prior = colour_prior(inputs, state, inpainter or cfg.prior_inpainter) if cfg.bg_strategy == "guided" else None
+        prior = (colour_prior(inputs, state, inpainter or cfg.prior_inpainter)
+                 if cfg.bg_strategy == "guided" and cfg.prior_weight > 0 else None)
         problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
                            schedule=False, prior=prior, density_hull=shaped)
         optimize(problem, state.adam, steps=cfg.steps_bg, start=state.step, final_ratio=cfg.lr_final_ratio,

@@ -1,8 +1,9 @@
 """Which background points behind the object some other training view sees, unmasked.
 
-A world point X is *seen* from view j when it projects into view j's image outside its object mask and
-nothing stands in front of it there: the full field's depth at that pixel reaches X (relative
-tolerance ``tol``). What some view sees is what the paper's masked loss can reconstruct; the rest
+A world point X is *in view* of view j (:func:`in_view`) when it projects into view j's image outside
+its object mask and nothing stands in front of it there: the full field's depth at that pixel is not
+nearer than X (relative tolerance ``tol``); it is *seen* (:func:`seen_elsewhere`) when that depth
+also ends at X, on its surface. What some view sees is what the paper's masked loss can reconstruct; the rest
 needs a prior (:mod:`mi_voldis.fit.lift`).
 """
 import numpy as np
