@@ -100,6 +100,14 @@ def project(camera, points):
     return camera.width * u, camera.height * v, pc[:, 2]
 
 
+def pixel_of(camera, points):
+    """Integer pixel (ix, iy) of world points (n, 3) and whether it lies in the frame, in front of the
+    camera (ix, iy are meaningless where it does not)."""
+    px, py, z = project(camera, points)
+    ix, iy = np.floor(px).astype(np.int64), np.floor(py).astype(np.int64)
+    return ix, iy, (z > 0) & (ix >= 0) & (ix < camera.width) & (iy >= 0) & (iy < camera.height)
+
+
 TABLE_WIDTH = 16  # floats per camera in a CameraTable: rotation (9), origin (3), tan_x, tan_y, offsets (2)
 
 

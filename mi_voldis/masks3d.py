@@ -23,7 +23,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .cameras import pixel_rays, project
+from .cameras import pixel_of, pixel_rays
 from .device import from_numpy
 from .fit.hull import visual_hull
 from .fit.visibility import pixel_points
@@ -92,9 +92,7 @@ def box_masks(cameras, surf, lo, hi):
 def _depth_gap(points, camera, depth):
     """Per point: its distance from ``camera`` minus the surface distance the camera sees at its pixel
     (NaN where it is outside the frame or behind the camera)."""
-    px, py, z = project(camera, points)
-    ix, iy = np.floor(px).astype(np.int64), np.floor(py).astype(np.int64)
-    ok = (z > 0) & (ix >= 0) & (ix < camera.width) & (iy >= 0) & (iy < camera.height)
+    ix, iy, ok = pixel_of(camera, points)
     gap = np.full(len(points), np.nan)
     dist = np.linalg.norm(points - np.asarray(camera.to_world)[:3, 3], axis=1)
     gap[ok] = dist[ok] - depth[iy[ok], ix[ok]]

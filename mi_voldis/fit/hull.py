@@ -6,7 +6,7 @@ mask in at least a fraction ``min_fraction`` of the views that see it, not neces
 """
 import numpy as np
 
-from ..cameras import project
+from ..cameras import pixel_of
 from ..metrics import dilate
 
 
@@ -16,9 +16,7 @@ def visual_hull(points, cameras, masks, dilation_px, min_fraction):
     seen = np.zeros(len(points), np.int32)
     inside = np.zeros(len(points), np.int32)
     for cam, mask in zip(cameras, masks):
-        px, py, z = project(cam, points)
-        ix, iy = np.floor(px).astype(np.int64), np.floor(py).astype(np.int64)
-        ok = (z > 0) & (ix >= 0) & (ix < cam.width) & (iy >= 0) & (iy < cam.height)
+        ix, iy, ok = pixel_of(cam, points)
         seen += ok
         hit = np.zeros(len(points), bool)
         hit[ok] = mask[iy[ok], ix[ok]]

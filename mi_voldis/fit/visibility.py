@@ -8,7 +8,7 @@ needs a prior (:mod:`mi_voldis.fit.lift`).
 """
 import numpy as np
 
-from ..cameras import pixel_rays, project
+from ..cameras import pixel_of, pixel_rays
 
 
 def in_view(points, cameras, depths, masks, tol=0.05):
@@ -19,9 +19,7 @@ def in_view(points, cameras, depths, masks, tol=0.05):
     points = np.asarray(points, np.float64)
     out = np.zeros(len(points), bool)
     for cam, depth, mask in zip(cameras, depths, masks):
-        px, py, z = project(cam, points)
-        ix, iy = np.floor(px).astype(np.int64), np.floor(py).astype(np.int64)
-        ok = (z > 0) & (ix >= 0) & (ix < cam.width) & (iy >= 0) & (iy < cam.height)
+        ix, iy, ok = pixel_of(cam, points)
         ok[ok] &= ~mask[iy[ok], ix[ok]]
         dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
         ok[ok] &= ~(depth[iy[ok], ix[ok]] < (1.0 - tol) * dist[ok])  # NaN depth (nothing there): in view
@@ -38,9 +36,7 @@ def seen_elsewhere(points, cameras, depths, masks, images=None, tol=0.03):
     total = np.zeros((len(points), 3)) if images is not None else None
     count = np.zeros(len(points))
     for j, (cam, depth, mask) in enumerate(zip(cameras, depths, masks)):
-        px, py, z = project(cam, points)
-        ix, iy = np.floor(px).astype(np.int64), np.floor(py).astype(np.int64)
-        ok = (z > 0) & (ix >= 0) & (ix < cam.width) & (iy >= 0) & (iy < cam.height)
+        ix, iy, ok = pixel_of(cam, points)
         ok[ok] &= ~mask[iy[ok], ix[ok]]
         dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
         ok[ok] &= np.abs(depth[iy[ok], ix[ok]] - dist[ok]) <= tol * dist[ok]
