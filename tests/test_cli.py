@@ -65,6 +65,23 @@ def test_the_benchmark_names_each_real_capture_it_skips(tmp_path, monkeypatch, c
     assert err == [f"bench: skipping fern: no {tmp_path / 'fern'} (set MI_VOLDIS_CAPTURES)"]
 
 
+def test_a_bench_with_nothing_to_run_stops_with_one_line_and_keeps_the_last_report(tmp_path, monkeypatch):
+    """An unknown --scenes name, or only captures that are not there: one line, and the report folder
+    (the last report) untouched."""
+    from mi_voldis.bench import run
+    from voldis_cli.bench import main
+    monkeypatch.setattr(run, "SHARED", str(tmp_path / "none"))
+    report = tmp_path / "reports"
+    report.mkdir()
+    (report / "removal.md").write_text("last")
+    for scenes, message in (("tabletop,bogus", "bogus not among"), ("statue", "nothing to run")):
+        with pytest.raises(SystemExit, match=message) as stop:
+            main(["--removal", "--scenes", scenes, "--work", str(tmp_path / "work"), "--report", str(report)])
+        assert str(stop.value).startswith("error: --scenes: ") and "\n" not in str(stop.value)
+    assert [p.name for p in report.iterdir()] == ["removal.md"] and (report / "removal.md").read_text() == "last"
+    assert not (tmp_path / "work").exists()
+
+
 def test_a_refit_takes_the_background_settings_of_today_and_the_rest_of_the_run(tmp_path):
     """A run fitted under older background defaults is refitted with today's (the bench and the hand
     command agree); its other settings stay, and --set still wins."""

@@ -44,8 +44,13 @@ def main(argv=None):
                           "no_record": step_profile(rays=args.rays, record=False)}, indent=1))
         return
     from mi_voldis.bench import report
-    from mi_voldis.bench.run import run_all, run_masks, run_removal
+    from mi_voldis.bench.run import run_all, run_masks, run_removal, section_scenes
     scenes = args.scenes.split(",") if args.scenes else None
+    section = "removal" if args.removal else "masks" if args.masks else "quick" if args.quick else "all"
+    try:  # before anything runs: a bad --scenes never overwrites the last report
+        section_scenes(section, scenes)
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
     for flag, (measure, write) in {"removal": (run_removal, report.write_removal),
                                    "masks": (run_masks, report.write_masks)}.items():
         if getattr(args, flag):  # one section alone, with its own report

@@ -39,6 +39,21 @@ def present(captures, scenes=None):
     return [c for c in wanted if os.path.isdir(os.path.join(SHARED, c))]
 
 
+def section_scenes(section, scenes=None):
+    """The scenes a section ("all", "quick", "removal", "masks") would run, of ``scenes`` if given (the real
+    captures only where present). Raises ValueError naming an unknown scene, or when nothing is left to
+    run (then no report is written over the last one)."""
+    captures = {"all": CAPTURES, "quick": [], "removal": REMOVAL_CAPTURES, "masks": []}[section]
+    offered = {"all": SCENES, "quick": SCENES[:1]}.get(section, TRUTH_SCENES) + captures
+    unknown = [s for s in scenes or [] if s not in offered]
+    if unknown:
+        raise ValueError(f"--scenes: {', '.join(unknown)} not among this section's scenes ({', '.join(offered)})")
+    run = [s for s in offered if s not in captures and (not scenes or s in scenes)] + present(captures, scenes)
+    if not run:
+        raise ValueError(f"--scenes: nothing to run (the captures are read from {SHARED}; set MI_VOLDIS_CAPTURES)")
+    return run
+
+
 def child(args, log_file=None):
     """Run a child Python process; returns its wall-clock seconds. Raises on failure. (Children report
     their own peak memory in metrics.json: ``ru_maxrss`` of a forked child includes the parent's.)"""
@@ -85,6 +100,7 @@ def run_throughput(quick):
 # per-scene configuration fern needed before resolutions were derived from the capture.
 SCENES = ["tabletop", "room"]  # bundled (rendered by scripts/make_dataset.py)
 RANDOM_SEEDS = [0, 1, 2, 3, 4]  # random scenes (make_dataset.py --random): the first five, fixed before any result
+TRUTH_SCENES = SCENES + [f"random{k}" for k in RANDOM_SEEDS]  # the scenes with ground truth
 CAPTURES = ["fern", "horns", "statue", "garden"]  # ../shared/data; skipped when absent
 VARIANTS = {
     "tabletop": {"dense (carve=false)": ["carve=false"]},
@@ -170,7 +186,7 @@ def ground_truth_fits(work, scenes, results):
     logs = os.path.join(work, "logs")
     os.makedirs(logs, exist_ok=True)
     t0 = time.perf_counter()
-    for scene in [s for s in SCENES + [f"random{k}" for k in RANDOM_SEEDS] if not scenes or s in scenes]:
+    for scene in [s for s in TRUTH_SCENES if not scenes or s in scenes]:
         data = make_data(scene, os.path.join(work, "data", scene), logs, False)
         yield scene, data, fit(data, os.path.join(work, "runs", f"{scene}_0"), [], logs, keep=True), logs
     results["seconds"] = time.perf_counter() - t0
