@@ -211,13 +211,18 @@ def test_a_lifted_surface_looks_the_same_from_every_view():
     assert np.abs(got - expected).mean() < 0.05
 
 
-def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_raw=4.0, empty=-20.0):
+SHADOW = (np.array([0.55, 0.0]), 0.15)  # centre (x, z) and radius of the sphere's shadow on the floor
+
+
+def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_raw=4.0, empty=-20.0, shadow=False):
     """A textured floor with a red sphere standing on it: the photos rendered from the truth, with exact
     masks and the ground-truth background (the floor alone), and as the fitted full field the truth
     plus a faint red haze around the sphere, as fits leave; ``hidden_floor``: without the floor under
     the sphere's footprint, which no photo shows (a fit leaves nothing there); ``sphere_raw``: the
     sphere's raw density (the floor's is 4); ``empty``: the raw density of empty space in the full
-    field (a fit leaves about -7, opacity 1e-3 per voxel, where the gradient still flows)."""
+    field (a fit leaves about -7, opacity 1e-3 per voxel, where the gradient still flows); ``shadow``:
+    the floor darkened in a disc beside the sphere (:data:`SHADOW`) in the photos and the full field but
+    not in the ground-truth background, and the dataset's effect masks where the photos differ from it."""
     from mi_voldis.fit.fields import FitInputs
     from mi_voldis.fit.state import FitState
     from mi_voldis.optim.adam import Adam
@@ -232,6 +237,7 @@ def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_r
     is_floor = (np.abs(pts[:, 1] - FLOOR_Y) < 1.5 * voxel) & real
     texture = np.stack([0.3 + 0.3 * (np.sin(6 * pts[:, 0]) > 0), 0.5 + 0.2 * np.cos(5 * pts[:, 2]),
                         np.full(len(pts), 0.35)], -1)
+    shade = np.where(shadow & (np.hypot(pts[:, 0] - SHADOW[0][0], pts[:, 2] - SHADOW[0][1]) < SHADOW[1]), 0.4, 1.0)
     dense, haze = 4.0, -3.0  # haze: about 13% opaque across its three voxels
     width = full.width
     out = {}
@@ -239,7 +245,8 @@ def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_r
         values = np.array(field.data).reshape(-1, width)
         block = values[: full.layout.vertices_per_brick].copy()
         values[:, 0] = np.where(is_floor, dense, empty if name == "full" else -20.0)
-        values[:, 1:4] = np.where(is_floor[:, None], np.log(texture / (1 - texture)), -10.0)
+        tint = texture * (shade[:, None] if name != "floor" else 1.0)
+        values[:, 1:4] = np.where(is_floor[:, None], np.log(tint / (1 - tint)), -10.0)
         if name != "floor":
             obj = (r < radius) & real
             fog = (r >= radius) & (r < radius + 3 * voxel) & real & ~is_floor & (name == "full")
@@ -268,6 +275,8 @@ def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_r
     ds = Dataset("synthetic", "", [f"v{k}" for k in range(views)], np.array(images, np.float32), cams, split,
                  SceneBox("world", lo, hi), masks=np.array(masks), backgrounds=np.array(backgrounds, np.float32),
                  meta={"aabb": [lo.tolist(), hi.tolist()], "format": "synthetic"})
+    if shadow:
+        ds.effects = (np.abs(ds.images - ds.backgrounds).max(-1) > 0.02) & ~ds.masks
     cfg = FitConfig.from_sources(None, ["space=\"world\"", "steps_bg=0", "max_samples=256", "prior_inpainter=\"telea\"",
                                         "resolution_schedule=[[0,40]]", "steps_full=1"])
     return ds, cfg, out["full"], FitInputs, FitState, Adam
@@ -328,17 +337,52 @@ def sphere_seen_unmasked(ds, pts, voxel, centre, radius=0.3, grow=1):
     return seen
 
 
-def guided_removal(tmp_path, **settings):
-    """The synthetic sphere's full field and the inputs and state after the guided background refit."""
+def guided_removal(tmp_path, shadow=False, effects=True, **settings):
+    """The synthetic sphere's full field and the inputs and state after the guided background refit;
+    ``shadow``: with the sphere's shadow (:func:`synthetic_object_scene`), given as effect masks if
+    ``effects``."""
     from mi_voldis.fit.train import fit
-    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
-    cfg = cfg.replace(bg_strategy="guided", steps_bg=30, **settings)
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene(shadow=shadow)
+    ds.effects = ds.effects if effects else None
+    cfg = cfg.replace(**{"bg_strategy": "guided", "steps_bg": 30, **settings})
     state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, cfg.adam_beta1, cfg.adam_beta2),
                      fields={"full": full})
     state.schedule, state.steps_full = [[0, 40]], 1
     checkpoint = str(tmp_path / "state.npz")
     state.save(checkpoint, "bg", 0)
     return (ds, full) + fit(ds, checkpoint, cfg, resume=True, progress=False)
+
+
+def test_a_shadow_given_as_effect_masks_leaves_with_the_object_and_the_floor_keeps_its_geometry(tmp_path):
+    """The sphere's shadow on the floor, given as effect masks: the guided refit fits no ray of it to the
+    photos (the ray pool leaves its pixels out) and draws it from the prior, so on the held-out views
+    the background there is nearer the unshadowed truth than the photos are and than the background
+    fitted without them, while no floor vertex under the shadow outside the object's hull changes its
+    density: only its colour (brighter)."""
+    from mi_voldis.field_state import density_of, neighbour_vertices
+    from mi_voldis.fit.background import background_ray_pool, hull_region
+    from mi_voldis.fit.fields import fit_integrator
+    errors, shadow = {}, None
+    for given in (False, True):
+        ds, full, inputs, state = guided_removal(tmp_path / str(given), shadow=True, effects=given, steps_bg=150)
+        shadow = shadow if ds.effects is None else ds.effects
+        bg = fit_integrator(inputs, state)
+        errors[given] = [np.abs(np.clip(render_camera(bg, ds.cameras[v], ("bg",))["bg"][0], 0, 1)
+                                - ds.backgrounds[v]) for v in ds.test]
+    assert all(shadow[v].sum() > 20 for v in ds.test)
+    errors = {k: np.mean([e[shadow[v]].mean() for e, v in zip(errs, ds.test)]) for k, errs in errors.items()}
+    photos = np.mean([np.abs(ds.images[v] - ds.backgrounds[v])[shadow[v]].mean() for v in ds.test])
+    assert errors[True] < 0.6 * errors[False] and errors[True] < 0.9 * photos, (errors, photos)
+    pool = background_ray_pool(ds, inputs.bank, inputs.cfg.bg_ray_dilation, ds.effects)
+    assert not (ds.effects[inputs.bank.views] | ds.masks[inputs.bank.views]).reshape(-1)[pool].any()
+    pts, real = vertex_positions(full)
+    hull = np.array(hull_region(inputs, full, neighbour_vertices(full))[0]) > 0
+    under = real & ~hull & (np.abs(pts[:, 1] - FLOOR_Y) < 1.5 * 2.0 / 39) & \
+        (np.hypot(pts[:, 0] - SHADOW[0][0], pts[:, 2] - SHADOW[0][1]) < SHADOW[1])
+    assert under.sum() > 10
+    assert np.array_equal(density_of(state.fields["bg"])[under], density_of(full)[under])
+    colour = np.array(state.fields["bg"].data).reshape(-1, full.width)[:, 1:4]
+    assert (colour[under] > np.array(full.data).reshape(-1, full.width)[under, 1:4]).mean() > 0.5  # brighter
 
 
 def test_what_some_view_sees_keeps_the_full_fields_density_so_the_foreground_is_the_object_alone(tmp_path):

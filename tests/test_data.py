@@ -173,6 +173,35 @@ def test_good_transforms_load(tmp_path):
     assert ds.masks.shape == (3, 18, 24) and ds.masks[1, 6, 7] and not ds.masks[1, 0, 0]
 
 
+def test_effect_masks_load_outside_the_object_and_only_where_given(tmp_path):
+    """``effect_mask_path`` (the object's shadow): read as white = effect, cleared inside the object's
+    mask, nothing for a frame without one; a missing file or no object masks is named in one line."""
+    root = str(tmp_path)
+    meta, names = good_transforms(root)
+    os.makedirs(tmp_path / "effects")
+    for k in (0, 2):
+        e = np.zeros((18, 24), np.uint8)
+        e[8:14, 4:20] = 255  # overlaps the object's mask (rows 5-9)
+        iio.imwrite(tmp_path / "effects" / names[k], e)
+        meta["frames"][k]["effect_mask_path"] = f"effects/{names[k]}"
+    rewrite(root, meta)
+    ds = load_dataset(root)
+    assert ds.effects.shape == (3, 18, 24) and not ds.effects[1].any()
+    for k in (0, 2):
+        assert not (ds.effects[k] & ds.masks[k]).any()
+        assert ds.effects[k][10:14, 4:20].all() and ds.effects[k].sum() == 6 * 16 - ds.masks[k][8:14, 4:20].sum()
+    meta["frames"][2]["effect_mask_path"] = "effects/none.png"
+    rewrite(root, meta)
+    with pytest.raises(DatasetError, match="effect mask 'effects/none.png' not found"):
+        load_dataset(root)
+    meta["frames"][2]["effect_mask_path"] = f"effects/{names[2]}"
+    rewrite(root, meta)
+    for n in names:
+        os.remove(tmp_path / "masks" / n)
+    with pytest.raises(DatasetError, match="effect_mask_path but no object masks"):
+        load_dataset(root)
+
+
 @pytest.mark.parametrize("breakage, message", [
     ("count", "2 poses but 3 images"),
     ("nan_pose", "non-finite pose"),

@@ -404,6 +404,74 @@ def write_masks(results, report_dir, command):
     return path
 
 
+def write_effects(results, report_dir, command):
+    """reports/effects.md: removal with and without the object's shadow as effect masks, beside OpenCV's
+    inpainting given the same masks; a sheet per scene. Returns the file's path."""
+    os.makedirs(report_dir, exist_ok=True)
+    md = _section_header("Removal with the object's shadow as an input", results, command) + [
+          "Per scene, from the removal section's default fit (its full field): the pixels outside the object's "
+          "mask where the photo differs from the ground-truth background (the object's shadow, its reflection: "
+          "`mi_voldis.bench.effects.effect_masks`) become the dataset's effect masks (`effect_mask_path`), and "
+          "the background is fitted again with the default `bg_strategy` without them and with them "
+          "(`python -m mi_voldis.bench.effects RUN OUT`); scored as the removal section scores, against the "
+          "ground-truth background inside the object's masks dilated by 3% of the diagonal. The 2D methods "
+          "inpaint each held-out view itself: in its dilated mask, and in that and its effect mask (the same "
+          "input as the volume's). Effect area: mean over training views, as a share of the object's.", "",
+          "| scene | effect area | in mask, without | with | Telea / NS, mask | Telea / NS, mask + effect | "
+          "with: margin over the best Telea / NS | outside, without / with (full field) | coverage IoU, "
+          "without / with | matte IoU, without / with | seconds (with) |",
+          "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for scene, row in results["scenes"].items():
+        a, b = row["without"]["methods"], row["with"]["methods"]
+        va, vb, flat = a["volume"], b["volume"], row["effects_2d"]
+        best = max(x for x in (flat.get("telea"), flat.get("ns"), a["telea"]["psnr_mask"], a["ns"]["psnr_mask"])
+                   if x is not None)
+        md.append(f"| {scene} | {row['effect_share']:.2f} | {_f(va['psnr_mask'], 2)} | {_f(vb['psnr_mask'], 2)} | "
+                  f"{_f(a['telea']['psnr_mask'], 2)} / {_f(a['ns']['psnr_mask'], 2)} | "
+                  f"{_f(flat.get('telea'), 2)} / {_f(flat.get('ns'), 2)} | {vb['psnr_mask'] - best:+.2f} | "
+                  f"{_f(va['psnr_outside'], 2)} / {_f(vb['psnr_outside'], 2)} ({_f(va.get('full_psnr_outside'), 2)}) | "
+                  f"{_f(va.get('fg_coverage_iou'), 2)} / {_f(vb.get('fg_coverage_iou'), 2)} | "
+                  f"{_f(va.get('fg_matte_iou'), 2)} / {_f(vb.get('fg_matte_iou'), 2)} | {row['with']['seconds']:.0f} |")
+    md.append("")
+    for scene, row in results["scenes"].items():
+        sheet = _effects_sheet(row, os.path.join(report_dir, f"effects_{scene}.png"))
+        if sheet:
+            md += [f"![{scene}]({sheet}) {scene}: rows photo with its effect mask in red, ground-truth background, "
+                   "the background without effect masks, with them; columns: the first held-out views.", ""]
+    path = os.path.join(report_dir, "effects.md")
+    with open(path, "w") as f:
+        f.write("\n".join(md) + "\n")
+    return path
+
+
+def _effects_sheet(row, path, views=3):
+    """One PNG: for the first ``views`` held-out views (columns), the photo with its effect mask in red,
+    the ground-truth background, and the background without and with effect masks (rows). Returns its
+    file name, or None."""
+    import imageio.v3 as iio
+    import numpy as np
+
+    from ..data import load_dataset
+    from ..io.images import contact_sheet, display_to_uint8, write_png
+    data = os.path.join(row["out"], "data")
+    if not os.path.isdir(data):
+        return None
+    ds = load_dataset(data, "transforms")
+    tests = [v for v in ds.test if all(os.path.isfile(os.path.join(row["out"], key, f"view{v:03d}_bg.png"))
+                                       for key in ("without", "with"))][:views]
+    if not tests:
+        return None
+    marked = []
+    for v in tests:
+        image = np.clip(ds.images[v], 0, 1)
+        marked.append(np.where(ds.effects[v][..., None], 0.5 * image + [0.5, 0.0, 0.0], image))
+    rows = [[display_to_uint8(m) for m in marked], [display_to_uint8(ds.backgrounds[v]) for v in tests]]
+    rows += [[iio.imread(os.path.join(row["out"], key, f"view{v:03d}_bg.png"))[..., :3] for v in tests]
+             for key in ("without", "with")]
+    write_png(path, contact_sheet([im for r in rows for im in r], columns=len(tests)))
+    return os.path.basename(path)
+
+
 def _masks_sheet(row, path, views=3):
     import numpy as np
 

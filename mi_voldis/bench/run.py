@@ -29,21 +29,22 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SHARED = os.environ.get("MI_VOLDIS_CAPTURES") or os.path.join(os.path.dirname(ROOT), "shared", "data")
 
 
-def present(captures, scenes=None):
-    """The real captures of ``captures`` (among ``scenes`` if given) found in SHARED; each one missing is
-    named on stderr, as the benchmark then skips it."""
+def present(captures, scenes=None, announce=True):
+    """The real captures of ``captures`` (among ``scenes`` if given) found in SHARED; with ``announce``
+    each one missing is named on stderr, as the benchmark then skips it (once: when the command's
+    scenes are checked, :func:`section_scenes`)."""
     wanted = [c for c in captures if not scenes or c in scenes]
-    for c in wanted:
+    for c in wanted if announce else ():
         if not os.path.isdir(os.path.join(SHARED, c)):
             print(f"bench: skipping {c}: no {os.path.join(SHARED, c)} (set MI_VOLDIS_CAPTURES)", file=sys.stderr)
     return [c for c in wanted if os.path.isdir(os.path.join(SHARED, c))]
 
 
 def section_scenes(section, scenes=None):
-    """The scenes a section ("all", "quick", "removal", "masks") would run, of ``scenes`` if given (the real
+    """The scenes a section ("all", "quick", "removal", "masks", "effects") would run, of ``scenes`` if given (the real
     captures only where present). Raises ValueError naming an unknown scene, or when nothing is left to
     run (then no report is written over the last one)."""
-    captures = {"all": CAPTURES, "quick": [], "removal": REMOVAL_CAPTURES, "masks": []}[section]
+    captures = {"all": CAPTURES, "quick": [], "removal": REMOVAL_CAPTURES, "masks": [], "effects": []}[section]
     offered = {"all": SCENES, "quick": SCENES[:1]}.get(section, TRUTH_SCENES) + captures
     unknown = [s for s in scenes or [] if s not in offered]
     if unknown:
@@ -217,7 +218,7 @@ def run_removal(work, report_dir, scenes=None):
         results["scenes"][scene] = {"fit": run, "strategies": strategy_rows(work, scene, run, STRATEGIES, logs)}
     t0, logs = time.perf_counter(), os.path.join(work, "logs")
     results["captures"] = {}
-    for capture in present(REMOVAL_CAPTURES, scenes):
+    for capture in present(REMOVAL_CAPTURES, scenes, announce=False):
         path = os.path.join(SHARED, capture)
         run = fit(path, os.path.join(work, "runs", f"{capture}_0"), [], logs, keep=True)
         results["captures"][capture] = {"fit": run,
@@ -248,6 +249,20 @@ def strategy_rows(work, scene, run, strategies, logs):
             rows[strategy] = {**json.load(f), "wall_seconds": wall, "out": out, "command": "python " + " ".join(args)}
     run.pop("curve", None)
     return rows
+
+
+def run_effects(work, report_dir, scenes=None):
+    """The object's shadow as an input (:mod:`mi_voldis.bench.effects`) on every ground-truth scene, from
+    the removal section's fits (made here when missing)."""
+    results = new_results()
+    for scene, _, run, logs in ground_truth_fits(work, scenes, results):
+        out = os.path.join(work, "effects", scene)
+        args = ["-m", "mi_voldis.bench.effects", run["out"], out]
+        wall = child(args, os.path.join(logs, f"effects_{scene}.log"))
+        with open(os.path.join(out, "metrics.json")) as f:
+            results["scenes"][scene] = {**json.load(f), "wall_seconds": wall, "out": out,
+                                        "command": "python " + " ".join(args)}
+    return save_results(results, report_dir, "effects.json")
 
 
 def run_masks(work, report_dir, scenes=None):
@@ -301,7 +316,7 @@ def run_all(quick, work, report_dir, scenes=None):
                 for scene in (SCENES[:1] if quick else SCENES)
                 if not scenes or scene in scenes}
     if not quick:
-        datasets.update({c: os.path.join(SHARED, c) for c in present(CAPTURES, scenes)})
+        datasets.update({c: os.path.join(SHARED, c) for c in present(CAPTURES, scenes, announce=False)})
     if scenes:
         datasets = {k: v for k, v in datasets.items() if k in scenes}
     for scene, path in datasets.items():

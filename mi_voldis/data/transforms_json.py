@@ -12,7 +12,8 @@ frame, as ns-process-data writes them: they give depth bounds and the box), ``ap
 over which RGBA images are composited; default white, Blender's convention), ``moved_transform``
 (4x4 world-space matrix of the ``moved_path`` ground truth). Per frame: ``file_path`` (relative to
 the JSON file, with or without extension), ``transform_matrix`` (camera-to-world, OpenGL axes),
-optional ``split`` ('train' / 'test'), ``object_mask_path`` (white = object), ``coverage_path``,
+optional ``split`` ('train' / 'test'), ``object_mask_path`` (white = object), ``effect_mask_path``
+(white = the object's shadow or reflection outside its mask; views without one have none), ``coverage_path``,
 ``background_path`` (the scene without the object) and ``moved_path``. Without
 ``object_mask_path``, masks come from a ``masks/`` folder with the images' file stems; views without
 one train the full field only. ``transforms_train.json`` + ``transforms_test.json`` (or ``_val``) may
@@ -181,9 +182,10 @@ def load_transforms(root, holdout=8, factor=None):
         splits = ["test" if holdout and k % holdout == 0 else "train" for k in range(len(frames))]
     undistort = [r[1] for r in resamplers]
     masks, masked = _masks(root, frames, base, paths, (h, w), factor, undistort, notes)
+    effects = _effects(frames, base, (h, w), factor, undistort, masks)
     ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names, images=np.stack(images),
                  cameras=cameras, split=np.array(splits), box=None, masks=masks, masked=masked,
-                 meta={"format": "transforms", "files": [p for p, _ in files], "notes": notes,
+                 effects=effects, meta={"format": "transforms", "files": [p for p, _ in files], "notes": notes,
                        "color_space": "linear (encoded with the sRGB curve)" if is_linear(paths[0]) else "sRGB"})
     if has_alpha(paths[0]):  # RGBA composited over a known colour: what rays see beyond the scene
         ds.meta["background_color"] = background.tolist()
@@ -218,6 +220,21 @@ def _masks(root, frames, base, paths, shape, factor, undistort, notes):
     if masks is not None:
         masks = np.stack([u(m, nearest=True) for u, m in zip(undistort, masks)])
     return masks, masked
+
+
+def _effects(frames, base, shape, factor, undistort, masks):
+    """Effect masks (``effect_mask_path``, white = effect) read and undistorted as the object masks,
+    outside them; none for views without one; None when no frame has one."""
+    if not any("effect_mask_path" in f for f, _, _ in frames):
+        return None
+    if masks is None:
+        raise DatasetError(f"{frames[0][1]}: frames give effect_mask_path but no object masks (object_mask_path)")
+    paths = [_resolve(base[path], frame["effect_mask_path"], "effect mask", path) if "effect_mask_path" in frame
+             else None for frame, path, _ in frames]
+    effects, given = read_masks(paths, "white", shape, [], resize=bool(factor and factor > 1))
+    if given is not None:
+        effects[~given] = False
+    return np.stack([u(m, nearest=True) for u, m in zip(undistort, effects)]) & ~masks
 
 
 def _optional(frames, base, key, reader, shape, undistort):

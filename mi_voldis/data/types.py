@@ -19,6 +19,8 @@ class Dataset:
     ``masks``: (N, H, W) bool (object = True) or None; ``masked``: (N,) bool, False for views that came
     without a mask (their mask is all True: they train the full field only, nothing of the background)
     or None when every view has one; ``split``: per-view 'train' or 'test';
+    ``effects``: (N, H, W) bool or None: pixels outside the object's mask that the object changes (its
+    shadow, its reflection), where the photos show the object's effect rather than the background;
     ``backgrounds``/``moved``: ground truth without the object / with it moved by
     ``moved_transform`` (None where the dataset has none; NaN images for views without them).
     ``points``: (P, 3) sparse world points of the capture (COLMAP, ``ply_file_path``) or None.
@@ -34,6 +36,7 @@ class Dataset:
     box: SceneBox
     masks: np.ndarray | None = None
     coverage: np.ndarray | None = None
+    effects: np.ndarray | None = None
     near_far: np.ndarray | None = None
     backgrounds: np.ndarray | None = None
     moved: np.ndarray | None = None

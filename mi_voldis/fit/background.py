@@ -1,6 +1,8 @@
 """How the background field starts from the full one: the part of the object's visual hull no training
 view sees unmasked cleared (``clear``, ``lift``) or the hull inpainted from around it (``harmonic``,
 ``guided``), before the refit on rays near the masks; and its colour cleared where nothing reads it."""
+import dataclasses
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -171,11 +173,27 @@ def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chu
     return shown > 0, front > 0
 
 
-def background_ray_pool(ds, bank, dilation):
-    """Flat indices (into ``bank``) of unmasked pixels within the masks dilated by ``dilation``."""
+def background_ray_pool(ds, bank, dilation, effects=None):
+    """Flat indices (into ``bank``) of unmasked pixels within the masks dilated by ``dilation``; with
+    ``effects`` (the dataset's effect masks), those pixels count as masked: the photos show the object's
+    shadow there, not the background."""
     diag = np.hypot(*ds.size)
-    near = dilate(bank.masks_np, int(np.ceil(dilation * diag))) & ~bank.masks_np
+    masks = bank.masks_np if effects is None else bank.masks_np | effects[bank.views]
+    near = dilate(masks, int(np.ceil(dilation * diag))) & ~masks
     return np.flatnonzero(near.reshape(-1)).astype(np.uint32)
+
+
+def effect_cells(inputs, state):
+    """Bool per stored vertex of the full field: the cells the rays of the effect masks (the object's
+    shadow, :attr:`~mi_voldis.data.types.Dataset.effects`) sample until their surface (transmittance
+    above 5%, :func:`masked_ray_cells`): the surfaces whose colour the photos show changed by the
+    object. Their geometry stays the full field's, which every view sees."""
+    ds = inputs.ds
+    views = [v for v in ds.masked_train if ds.effects[v].any()]
+    if not views:
+        return dr.zeros(mi.Bool, state.fields["full"].vertices)
+    shadow = dataclasses.replace(inputs, ds=dataclasses.replace(ds, masks=ds.effects))
+    return masked_ray_cells(shadow, state, views)[0]
 
 
 def clear_empty_background_color(inputs, state, region=None):

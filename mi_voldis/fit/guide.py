@@ -8,7 +8,9 @@ the object's silhouette. The prior adds, on the masked pixels of every masked tr
     L_prior = lambda * mean_i ||x^bg_i - I_i||^2,
 
 where I_i is view i's photo inpainted in 2D inside its mask (grown by ``dilation``: edge pixels mix the
-object in), as SPIn-NeRF supervises with per-view inpaintings. The views' inpaintings disagree where no
+object in) and its effect mask if the dataset has one (the object's shadow: there the photos show the
+object's effect, and L_bg leaves those pixels to the prior), as SPIn-NeRF supervises with per-view
+inpaintings. The views' inpaintings disagree where no
 view sees the background, and the field settles on their average, consistent by construction; where
 some view does see it, that view's unmasked rays (weight 1 against ``lambda``) decide.
 
@@ -57,10 +59,10 @@ def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9):
     for k, v in enumerate(train):
         if v not in masked:
             continue
-        region[k] = dilate(ds.masks[v], grow)
+        region[k] = dilate(ds.masks[v], grow) | (ds.effects[v] if ds.effects is not None else False)
         depth, hit = median_depth(integrator, ds.cameras[v])
         hole = inpainting_hole(region[k], depth, hit, ds.masks[v], around, nearer)
         images[k] = paint(np.clip(ds.images[v], 0, 1), hole)
     inpainted = dataclasses.replace(ds, images=images, cameras=[ds.cameras[v] for v in train], masks=region,
-                                    split=np.array(["train"] * len(train)), masked=None)
+                                    split=np.array(["train"] * len(train)), masked=None, effects=None)
     return RayBank(inpainted, np.arange(len(train))), np.flatnonzero(region.reshape(-1)).astype(np.uint32)

@@ -19,7 +19,10 @@ Phases (``bg_strategy``):
 * ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
   training view (each view's photo inpainted in its mask, occluders in front of the object left out of
   the inpainting's sources; weight ``prior_weight`` against 1 for L_bg, :mod:`mi_voldis.fit.guide`):
-  what no view sees becomes the views' consensus instead of the harmonic fill's blend.
+  what no view sees becomes the views' consensus instead of the harmonic fill's blend. With effect masks
+  (the dataset's ``effects``: the object's shadow on the rest of the scene), their pixels leave L_bg and
+  join the prior's, and the surfaces under them are refitted in colour alone
+  (:func:`~mi_voldis.fit.background.effect_cells`): the shadow leaves with the object, the floor stays.
 * ``lift``: the same full field; the background starts as a copy of it with the part of the object's
   visual hull (from the masks) no training view sees unmasked emptied, only hull cells are refitted
   with L_bg on rays near the masks (what other views see), and what no view sees is filled from a
@@ -49,6 +52,7 @@ from .background import (
     background_ray_pool,
     background_regions,
     clear_empty_background_color,
+    effect_cells,
     hull_region,
     start_cleared,
     start_harmonic,
@@ -131,7 +135,11 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
                 shaped = dr.select(unseen, free, 0.0)
         else:  # on the background's lattice (the lifted prior may have allocated bricks)
             free = cleared_region(inputs, state)
-        pool = background_ray_pool(dataset, inputs.bank, cfg.bg_ray_dilation)
+        effects = dataset.effects if cfg.bg_strategy == "guided" else None
+        if effects is not None:  # the surfaces under the object's shadow: their colour alone is refitted
+            shaped = free if shaped is None else shaped
+            free = dr.select(effect_cells(inputs, state), 1.0, free)
+        pool = background_ray_pool(dataset, inputs.bank, cfg.bg_ray_dilation, effects)
         prior = (colour_prior(inputs, state, inpainter or cfg.prior_inpainter)
                  if cfg.bg_strategy == "guided" and cfg.prior_weight > 0 else None)
         problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
