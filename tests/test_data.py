@@ -198,8 +198,31 @@ def test_effect_masks_load_outside_the_object_and_only_where_given(tmp_path):
     rewrite(root, meta)
     for n in names:
         os.remove(tmp_path / "masks" / n)
-    with pytest.raises(DatasetError, match="effect_mask_path but no object masks"):
+    with pytest.raises(DatasetError, match="effect masks but no object masks"):
         load_dataset(root)
+
+
+def test_effect_masks_are_read_from_an_effects_folder_by_file_stem(tmp_path):
+    """Without ``effect_mask_path``, ``effects/`` beside ``masks/`` (as for LLFF and COLMAP)."""
+    root = str(tmp_path)
+    _, names = good_transforms(root)
+    os.makedirs(tmp_path / "effects")
+    e = np.zeros((18, 24), np.uint8)
+    e[12:16, 2:8] = 255
+    iio.imwrite(tmp_path / "effects" / names[1], e)
+    ds = load_dataset(root)
+    assert ds.effects[1].sum() == 24 and not ds.effects[[0, 2]].any()
+    llff = tmp_path / "llff"  # the same folders beside an LLFF capture
+    cams = [Camera(look_at([0.1 * k, 0.0, -3.0], [0.0, 0.0, 0.0]), 50.0, 24, 18) for k in range(3)]
+    llff.mkdir()
+    write_llff(str(llff), cams, [(1.0, 5.0)] * 3)
+    shot = write_images(str(llff / "images"), 3, 18, 24)
+    for sub in ("masks", "effects"):
+        os.makedirs(llff / sub)
+        for k, name in enumerate(shot):
+            iio.imwrite(llff / sub / name, iio.imread(tmp_path / sub / names[k]) if (tmp_path / sub / names[k]).exists()
+                        else np.zeros((18, 24), np.uint8))
+    assert np.array_equal(load_dataset(str(llff)).effects, ds.effects)
 
 
 @pytest.mark.parametrize("breakage, message", [

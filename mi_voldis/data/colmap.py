@@ -11,7 +11,8 @@ Read from COLMAP's documented formats (no pycolmap needed). Binary, little-endia
 Text files hold the same, one camera or point per line, two lines per image (the second, the 2D
 points, may be empty). A pose maps world to camera: x_cam = R(q) x + t, in OpenCV's camera axes (+x
 right, +y down, +z forward); Mitsuba's camera frame flips x and y. Lenses with distortion are
-undistorted once (:mod:`mi_voldis.data.lens`). Object masks: ``masks/`` by file stem (white = object).
+undistorted once (:mod:`mi_voldis.data.lens`). Object masks: ``masks/`` by file stem (white = object);
+effect masks (the object's shadow): ``effects/`` by file stem.
 The points give each view's depth bounds (forward-facing captures) and the box.
 """
 import os
@@ -21,7 +22,7 @@ import numpy as np
 
 from ..transforms import quaternion_to_rotation
 from .conventions import camera_from_intrinsics
-from .images import check_sizes, is_linear, mask_folder_paths, read_image, read_masks
+from .images import check_sizes, is_linear, mask_folder_paths, read_effects, read_image, read_masks
 from .lens import COLMAP_MODELS, LensError, lens_from_colmap
 from .scene_box import capture_box
 from .types import Dataset, DatasetError
@@ -198,9 +199,12 @@ def load_colmap(root, holdout=8, factor=None):
     masks, masked = (None, None) if mpaths is None else read_masks(mpaths, "white", (h, w), notes, resize=bool(factor))
     if masks is not None:
         masks = np.stack([undistorters[r[3]][1](m, nearest=True) for r, m in zip(records, masks)])
+    effects = read_effects(mask_folder_paths(root, paths, factor, "effects") or [], (h, w), masks, bool(factor))
+    if effects is not None:
+        effects = np.stack([undistorters[r[3]][1](m, nearest=True) for r, m in zip(records, effects)]) & ~masks
     split = np.array(["test" if holdout and k % holdout == 0 else "train" for k in range(len(names))])
     ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names, images=np.stack(images),
-                 cameras=cameras, split=split, box=None, masks=masks, masked=masked, points=points,
+                 cameras=cameras, split=split, box=None, masks=masks, masked=masked, effects=effects, points=points,
                  meta={"format": "colmap", "model": folder, "image_folder": image_dir, "notes": notes,
                        "color_space": "linear (encoded with the sRGB curve)" if is_linear(paths[0]) else "sRGB"})
     ds.box, ds.near_far = capture_box(cameras, points, folder, notes)

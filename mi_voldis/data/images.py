@@ -136,16 +136,31 @@ def check_sizes(images, paths, what="image"):
                                f"all {what}s of a set must have one size")
 
 
-def mask_folder_paths(root, image_paths, factor=None):
-    """Per image, its mask in ``root/masks_K/`` (with ``factor`` K > 1, when that folder exists) or
-    ``root/masks/`` with the same file stem, or None; None when there is no such folder."""
-    names = [f"masks_{factor}"] if factor and factor > 1 else []
-    folder = next((os.path.join(root, d) for d in names + ["masks"] if os.path.isdir(os.path.join(root, d))), None)
+def mask_folder_paths(root, image_paths, factor=None, kind="masks"):
+    """Per image, its mask in ``root/<kind>_K/`` (with ``factor`` K > 1, when that folder exists) or
+    ``root/<kind>/`` with the same file stem, or None; None when there is no such folder."""
+    names = [f"{kind}_{factor}"] if factor and factor > 1 else []
+    folder = next((os.path.join(root, d) for d in names + [kind] if os.path.isdir(os.path.join(root, d))), None)
     if folder is None:
         return None
     by_stem = {os.path.splitext(f)[0]: f for f in os.listdir(folder)}
     stems = (os.path.splitext(os.path.basename(p))[0] for p in image_paths)
     return [os.path.join(folder, by_stem[s]) if s in by_stem else None for s in stems]
+
+
+def read_effects(paths, shape, masks, resize=False):
+    """Effect masks (white = where the object changes the rest of the scene: its shadow, its reflection)
+    of the views whose entry in ``paths`` is a path, none for the others, outside the object ``masks``;
+    None when no view has one. Effect masks without object masks are refused, naming the first file."""
+    given = [p for p in paths if p is not None]
+    if not given:
+        return None
+    if masks is None:
+        raise DatasetError(f"{given[0]}: effect masks but no object masks to go with them")
+    effects, masked = read_masks(paths, "white", shape, [], resize)
+    if masked is not None:
+        effects[~masked] = False
+    return effects & ~masks
 
 
 def read_masks(paths, rule, shape, notes, resize=False):

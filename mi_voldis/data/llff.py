@@ -5,7 +5,8 @@ back], camera position, and [H, W, focal] of the ORIGINAL images) and the near/f
 focal length is rescaled to the size of the images actually read. Object masks: SPIn-NeRF's layout
 (:func:`mask_paths`: ``images_K/label/`` for training views, ``images_K/test_label/`` for the test
 views photographed without the object, whose photos are then the ground-truth background) or
-``masks/NAME.*`` (white = object); views without a mask train the full field only. A forward-facing
+``masks/NAME.*`` (white = object); views without a mask train the full field only. Effect masks (the
+object's shadow, :class:`~mi_voldis.data.types.Dataset`): ``effects/NAME.*`` (white). A forward-facing
 rig gets NDC with NeRF's near plane 0.75 x the smallest depth bound; another rig a world box.
 """
 import os
@@ -13,7 +14,7 @@ import os
 import numpy as np
 
 from .conventions import camera_from_intrinsics, llff_to_mitsuba, mitsuba_to_llff, rigid_error
-from .images import check_sizes, is_linear, list_images, mask_folder_paths, read_image, read_masks
+from .images import check_sizes, is_linear, list_images, mask_folder_paths, read_effects, read_image, read_masks
 from .scene_box import NEAR_FRACTION, capture_box
 from .types import Dataset, DatasetError
 
@@ -96,10 +97,11 @@ def load_llff(root, factor=None, holdout=8):
                          "the background without the object")
         given = [t if t is not None else m for m, t in zip(train_paths, test_paths)]
         masks, masked = read_masks(given, rule, (h, w), notes)
+    effects = read_effects(mask_folder_paths(root, paths, kind="effects") or [], (h, w), masks)
     box, _ = capture_box(cameras, None, path, notes, near=NEAR_FRACTION * bounds.min(), far=bounds.max() * 1.5)
     ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names,
                  images=np.stack(images), cameras=cameras, split=split, box=box, masks=masks, masked=masked,
-                 near_far=bounds, backgrounds=backgrounds,
+                 effects=effects, near_far=bounds, backgrounds=backgrounds,
                  meta={"format": "llff", "image_folder": folder, "notes": notes,
                        "color_space": "linear (encoded with the sRGB curve)" if is_linear(paths[0]) else "sRGB"})
     return ds

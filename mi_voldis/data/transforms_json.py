@@ -13,7 +13,8 @@ over which RGBA images are composited; default white, Blender's convention), ``m
 (4x4 world-space matrix of the ``moved_path`` ground truth). Per frame: ``file_path`` (relative to
 the JSON file, with or without extension), ``transform_matrix`` (camera-to-world, OpenGL axes),
 optional ``split`` ('train' / 'test'), ``object_mask_path`` (white = object), ``effect_mask_path``
-(white = the object's shadow or reflection outside its mask; views without one have none), ``coverage_path``,
+(white = the object's shadow or reflection outside its mask, else ``effects/`` by file stem; views
+without one have none), ``coverage_path``,
 ``background_path`` (the scene without the object) and ``moved_path``. Without
 ``object_mask_path``, masks come from a ``masks/`` folder with the images' file stems; views without
 one train the full field only. ``transforms_train.json`` + ``transforms_test.json`` (or ``_val``) may
@@ -33,6 +34,7 @@ from .images import (
     is_linear,
     mask_folder_paths,
     read_coverage,
+    read_effects,
     read_image,
     read_masks,
 )
@@ -182,7 +184,7 @@ def load_transforms(root, holdout=8, factor=None):
         splits = ["test" if holdout and k % holdout == 0 else "train" for k in range(len(frames))]
     undistort = [r[1] for r in resamplers]
     masks, masked = _masks(root, frames, base, paths, (h, w), factor, undistort, notes)
-    effects = _effects(frames, base, (h, w), factor, undistort, masks)
+    effects = _effects(root, frames, base, paths, (h, w), factor, undistort, masks)
     ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names, images=np.stack(images),
                  cameras=cameras, split=np.array(splits), box=None, masks=masks, masked=masked,
                  effects=effects, meta={"format": "transforms", "files": [p for p, _ in files], "notes": notes,
@@ -222,18 +224,17 @@ def _masks(root, frames, base, paths, shape, factor, undistort, notes):
     return masks, masked
 
 
-def _effects(frames, base, shape, factor, undistort, masks):
-    """Effect masks (``effect_mask_path``, white = effect) read and undistorted as the object masks,
-    outside them; none for views without one; None when no frame has one."""
-    if not any("effect_mask_path" in f for f, _, _ in frames):
+def _effects(root, frames, base, paths, shape, factor, undistort, masks):
+    """Effect masks (``effect_mask_path``, else ``effects/`` by file stem), read and undistorted as the
+    object masks, outside them; None when there are none."""
+    if any("effect_mask_path" in f for f, _, _ in frames):
+        epaths = [_resolve(base[path], frame["effect_mask_path"], "effect mask", path)
+                  if "effect_mask_path" in frame else None for frame, path, _ in frames]
+    else:
+        epaths = mask_folder_paths(root, paths, factor, "effects") or []
+    effects = read_effects(epaths, shape, masks, resize=bool(factor and factor > 1))
+    if effects is None:
         return None
-    if masks is None:
-        raise DatasetError(f"{frames[0][1]}: frames give effect_mask_path but no object masks (object_mask_path)")
-    paths = [_resolve(base[path], frame["effect_mask_path"], "effect mask", path) if "effect_mask_path" in frame
-             else None for frame, path, _ in frames]
-    effects, given = read_masks(paths, "white", shape, [], resize=bool(factor and factor > 1))
-    if given is not None:
-        effects[~given] = False
     return np.stack([u(m, nearest=True) for u, m in zip(undistort, effects)]) & ~masks
 
 
