@@ -15,6 +15,9 @@ object's, so whatever stands in front of the object stays unmasked.
   around the surface points the given masks cover. With the photos, OpenCV's GrabCut settles the
   "maybe" pixels of each view by colour and image edges (sure pixels fixed, the hull's outside fixed
   as background); without them they count as the object's. Given views keep their given masks.
+* Effect masks (the object's shadow, :attr:`~mi_voldis.data.types.Dataset.effects`) of a few views mark
+  part of the surfaces, not a solid: x is in it when some given view sees it (as above) inside its mask,
+  a union over the given views rather than a hull (:func:`surface_masks`).
 """
 import os
 
@@ -164,12 +167,37 @@ def view_index(ds, key):
     raise ValueError(f"{ds.root}: no view named '{key}' (views are named like {ds.names[0]})")
 
 
-def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=None, cfg=None, progress=True):
+def surface_masks(cameras, surf, given, tol=0.05):
+    """Per view, the pixels whose surface point some view of ``given`` {view index: mask (H, W) bool} sees
+    inside its mask (its distance from that camera within ``tol`` of the surface distance there): a
+    patch of the surfaces, such as the object's shadow. Given views keep their given masks."""
+    out = []
+    for v, (cam, (depth, valid)) in enumerate(zip(cameras, surf)):
+        if v in given:
+            out.append(given[v])
+            continue
+        pixels, x = _points(cam, depth, valid)
+        marked = np.zeros(len(x), bool)
+        for g, mask in given.items():
+            gap, dist = _depth_gap(x, cameras[g], surf[g][0])
+            ix, iy, ok = pixel_of(cameras[g], x)
+            ok[ok] &= mask[iy[ok], ix[ok]]
+            marked |= ok & (np.abs(np.nan_to_num(gap, nan=np.inf)) <= tol * dist)
+        m = np.zeros(depth.size, bool)
+        m[pixels[marked]] = True
+        out.append(m.reshape(depth.shape))
+    return out
+
+
+def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=None, cfg=None, progress=True,
+               effects=False):
     """Write an object mask for every view of the dataset at ``dataset`` into the folder ``out``
     (``<image stem>.png``, white = object: what the loaders read from ``DATASET/masks/``), from
     ``given`` {view name: mask file} or a world ``box`` (lo, hi), through the full field of the run
-    ``run_dir`` (fitted there first when it does not exist yet). Returns a summary; with ground-truth
-    coverage in the dataset, the masks' IoU against it."""
+    ``run_dir`` (fitted there first when it does not exist yet); with ``effects``, the given masks are
+    effect masks (the object's shadow) and so are those written (:func:`surface_masks`; the loaders read
+    them from ``DATASET/effects/``). Returns a summary; with ground-truth coverage in the dataset, the
+    object masks' IoU against it."""
     from .data import load_dataset
     from .data.images import read_mask
     from .fit.run import run_fit
@@ -192,6 +220,8 @@ def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=N
     surf = surfaces(integrator, ds.cameras)
     if box is not None:
         result = box_masks(ds.cameras, surf, *box)
+    elif effects:
+        result = surface_masks(ds.cameras, surf, masks)
     else:
         result = view_masks(ds.cameras, surf, masks, images=ds.images)
     with staged(out) as stage:
@@ -199,7 +229,7 @@ def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=N
             write_png(os.path.join(stage, os.path.splitext(name)[0] + ".png"), np.where(m, 255, 0).astype(np.uint8))
     summary = {"masks": out, "views": len(result), "object_share": float(np.mean([m.mean() for m in result])),
                "empty_views": int(sum(not m.any() for m in result))}
-    if ds.coverage is not None:
+    if ds.coverage is not None and not effects:
         scores = [iou(m, c > 0.5) for v, (m, c) in enumerate(zip(result, ds.coverage)) if v not in masks]
         summary["iou_vs_coverage"] = float(np.nanmean(scores))
     return summary

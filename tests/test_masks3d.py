@@ -4,10 +4,11 @@ import json
 import os
 
 import numpy as np
+import pytest
 from test_background import FLOOR_Y, synthetic_object_scene
 
-from mi_voldis.masks3d import box_masks, surfaces, view_masks
-from mi_voldis.metrics import iou
+from mi_voldis.masks3d import box_masks, surface_masks, surfaces, view_masks
+from mi_voldis.metrics import dilate, iou
 from mi_voldis.scene import build_integrator, integrator_properties
 from mi_voldis.space import SceneSpace
 
@@ -38,6 +39,23 @@ def test_masks_from_two_views_and_from_a_box():
     assert ious.mean() >= 0.9 and ious.min() >= 0.8, ious
 
 
+def test_the_shadow_from_two_views_is_found_in_every_view():
+    """Effect masks (the sphere's shadow on the floor) of two views lifted through the surface, a union of
+    what either sees: on every other view that shows the shadow, the lifted pixels lie on it (within a
+    pixel: its rim is soft at 40x30) and cover most of it."""
+    ds, _, full, *_ = synthetic_object_scene(views=10, shadow=True)
+    props = integrator_properties(SceneSpace("world"), samples=256, step_size=0.5 * VOXEL)
+    surf = surfaces(build_integrator({"full": full.plugin(), "bg": full.plugin()}, props), ds.cameras)
+    given = {1: ds.effects[1], 4: ds.effects[4]}
+    lifted = surface_masks(ds.cameras, surf, given)
+    shown = [v for v in range(len(ds.images)) if v not in given and ds.effects[v].sum() >= 40]
+    assert len(shown) >= 5
+    on = [(lifted[v] & dilate(ds.effects[v], 1)).sum() / lifted[v].sum() for v in shown]
+    ious = [iou(lifted[v], ds.effects[v]) for v in shown]
+    assert min(on) >= 0.8 and np.mean(ious) >= 0.55 and min(ious) >= 0.4, (on, ious)
+    np.testing.assert_array_equal(lifted[1], ds.effects[1])
+
+
 def test_make_masks_script_writes_masks_train_reads(tiny_dataset, tiny_run, tmp_path, capsys):
     """The script on a fitted run: masks for every view, the given views' own masks kept, a box whose
     masks are empty outside it, and bad input as one line naming the problem."""
@@ -64,3 +82,11 @@ def test_make_masks_script_writes_masks_train_reads(tiny_dataset, tiny_run, tmp_
     assert _boundary.run(main, [tiny_dataset, "--out", far, "--run", tiny_run, "--from-views",
                                 f"nope={given[0].split('=')[1]}"]) == 1
     assert "no view named 'nope'" in capsys.readouterr().err
+    shade = str(tmp_path / "effects")  # --effects: the given masks as a patch of the surfaces
+    assert _boundary.run(main, [tiny_dataset, "--out", shade, "--run", tiny_run, "--quiet", "--effects",
+                                "--from-views", *given]) == 0
+    assert "iou_vs_coverage" not in json.loads(capsys.readouterr().out)
+    np.testing.assert_array_equal(read_mask(os.path.join(shade, ds.names[4]), "white"), ds.masks[4])
+    with pytest.raises(SystemExit):
+        main([tiny_dataset, "--out", shade, "--effects", "--box", "0,0,0,1,1,1"])
+    assert "--effects goes with --from-views" in capsys.readouterr().err

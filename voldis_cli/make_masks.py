@@ -2,12 +2,15 @@
 
     python scripts/make_masks.py DATASET --out DATASET/masks --from-views VIEW=MASK.png [VIEW=MASK.png ...]
     python scripts/make_masks.py DATASET --out DATASET/masks --box x0,y0,z0,x1,y1,z1
+    python scripts/make_masks.py DATASET --out DATASET/effects --effects --from-views VIEW=SHADOW.png [...]
 
 Fits the full field first (into --run, default OUT.run; an existing run there is reused), then lifts
 the given masks or box into 3D through the field's surface (mi_voldis/masks3d.py) and writes, per view,
 <image stem>.png (white = object) of the object's visible part: what stands in front of it stays
 unmasked. VIEW: an image name, its stem or its index. The box is in world units (the dataset's poses),
-whatever scene space the fit uses. scripts/train.py then reads DATASET/masks/.
+whatever scene space the fit uses. scripts/train.py then reads DATASET/masks/. With --effects the given
+masks mark the object's shadow (or reflection) on the surfaces: each view's pixels whose surface point some
+given view sees inside its mask, for DATASET/effects/.
 """
 import json
 import os
@@ -34,6 +37,8 @@ def main(argv=None):
     how = ap.add_mutually_exclusive_group(required=True)
     how.add_argument("--from-views", nargs="+", metavar="VIEW=MASK", help="masks of a few views")
     how.add_argument("--box", help="world-space box x0,y0,z0,x1,y1,z1 around the object")
+    ap.add_argument("--effects", action="store_true",
+                    help="--from-views masks are effect masks (the object's shadow): a patch of the surfaces")
     ap.add_argument("--run", help="run folder of the full field (fitted there when missing; default OUT.run)")
     ap.add_argument("--format", default="auto", choices=("auto", "llff", "transforms", "colmap"))
     ap.add_argument("--factor", "--downscale", type=int, metavar="K", help="read images_K/")
@@ -52,11 +57,14 @@ def main(argv=None):
             if not os.path.isfile(path):
                 raise ValueError(f"{path}: no such mask file")
             given[view] = path
+    if args.effects and not args.from_views:
+        ap.error("--effects goes with --from-views")
     box = parse_box(args.box) if args.box else None
     from mi_voldis.fit.config import FitConfig
     from mi_voldis.masks3d import make_masks
     summary = make_masks(args.dataset, args.run or args.out.rstrip("/") + ".run", args.out, given, box, args.format,
-                         args.factor, FitConfig.from_sources(None, args.set), progress=not args.quiet)
+                         args.factor, FitConfig.from_sources(None, args.set), progress=not args.quiet,
+                         effects=args.effects)
     print(json.dumps(summary, indent=1))
 
 
