@@ -34,6 +34,11 @@ def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto"
         dataset = load_dataset(dataset_path, fmt, holdout, factor)
         for line in dataset.meta.get("notes", []) if progress else ():
             print(f"note: {line}", file=sys.stderr)
+        if dataset.effects is not None and progress:
+            use = "the background leaves them to its prior" if cfg.bg_strategy == "guided" else \
+                f"ignored: only bg_strategy 'guided' reads them, not '{cfg.bg_strategy}'"
+            print(f"note: effect masks (the object's shadow) on {int(dataset.effects.any(axis=(1, 2)).sum())} of "
+                  f"{len(dataset.images)} views: {use}", file=sys.stderr)
         record = dataset_record(dataset_path, dataset, holdout, factor)
         write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": record})
         t0 = time.perf_counter()
