@@ -392,16 +392,8 @@ def write_masks(results, report_dir, command):
         diff = None if made is None or true is None else made - true
         md.append(f"| {scene} | {', '.join(row['given'])} | {_f(row['iou_mean'], 3)} | {_f(row['iou_min'], 3)} | "
                   f"{_f(made, 2)} | {_f(true, 2)} | {_f(diff, 2)} |")
-    md.append("")
-    for scene, row in results["scenes"].items():
-        sheet = _masks_sheet(row, os.path.join(report_dir, f"masks_{scene}.png"))
-        if sheet:
-            md += [f"![{scene}]({sheet}) {scene}: rows photo, exact coverage > 0.5, made mask; columns: "
-                   "the three views of lowest IoU.", ""]
-    path = os.path.join(report_dir, "masks.md")
-    with open(path, "w") as f:
-        f.write("\n".join(md) + "\n")
-    return path
+    return _write_with_sheets(md, results, report_dir, "masks", _masks_sheet,
+                              "rows photo, exact coverage > 0.5, made mask; columns: the three views of lowest IoU.")
 
 
 def write_effects(results, report_dir, command):
@@ -432,13 +424,20 @@ def write_effects(results, report_dir, command):
                   f"{_f(va['psnr_outside'], 2)} / {_f(vb['psnr_outside'], 2)} ({_f(va.get('full_psnr_outside'), 2)}) | "
                   f"{_f(va.get('fg_coverage_iou'), 2)} / {_f(vb.get('fg_coverage_iou'), 2)} | "
                   f"{_f(va.get('fg_matte_iou'), 2)} / {_f(vb.get('fg_matte_iou'), 2)} | {row['with']['seconds']:.0f} |")
-    md.append("")
+    return _write_with_sheets(md, results, report_dir, "effects", _effects_sheet,
+                              "rows photo with its effect mask in red, ground-truth background, the background "
+                              "without effect masks, with them; columns: the first held-out views.")
+
+
+def _write_with_sheets(md, results, report_dir, name, sheet, caption):
+    """Write ``md`` and, per scene, the sheet ``sheet(row, path)`` makes (``<name>_<scene>.png``) with its
+    ``caption`` to ``<name>.md`` in ``report_dir``. Returns the file's path."""
+    md = md + [""]
     for scene, row in results["scenes"].items():
-        sheet = _effects_sheet(row, os.path.join(report_dir, f"effects_{scene}.png"))
-        if sheet:
-            md += [f"![{scene}]({sheet}) {scene}: rows photo with its effect mask in red, ground-truth background, "
-                   "the background without effect masks, with them; columns: the first held-out views.", ""]
-    path = os.path.join(report_dir, "effects.md")
+        made = sheet(row, os.path.join(report_dir, f"{name}_{scene}.png"))
+        if made:
+            md += [f"![{scene}]({made}) {scene}: {caption}", ""]
+    path = os.path.join(report_dir, f"{name}.md")
     with open(path, "w") as f:
         f.write("\n".join(md) + "\n")
     return path
