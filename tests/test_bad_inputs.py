@@ -101,6 +101,7 @@ T, OPT, R, M, E = "train", "optimize", "render", "make_dataset", "export_vol"
 SCENE = "scenes/tabletop.xml"
 CASES = [
     # (script, arguments, exit code, text the one line must contain)
+    (T, ["{dataset}", "--out", "{existing}", "--threads", "0"], 2, "--threads: must be a whole number >= 1"),
     (T, ["{base}/nowhere", "--out", "{existing}"], 1, "{base}/nowhere: no such dataset folder"),
     (T, ["{base}/empty_dataset", "--out", "{existing}"], 1, "neither transforms.json, poses_bounds.npy nor"),
     (T, ["{base}/fov0", "--out", "{existing}"], 1, "camera_angle_x must be in (0, pi)"),

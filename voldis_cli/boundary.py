@@ -71,6 +71,19 @@ def add_debug(parser):
     parser.add_argument("--debug", action="store_true", help="show the traceback of an error")
 
 
+def add_threads(parser):
+    parser.add_argument("--threads", type=positive, default=None, metavar="N",
+                        help="CPU threads of the LLVM variants (default: all cores); with 1 a run repeats bit for "
+                             "bit (more threads add atomically, in varying order)")
+
+
+def set_threads(args):
+    """Apply ``--threads`` to Dr.Jit's thread pool (the LLVM backend's; the CUDA variants ignore it)."""
+    if args.threads:
+        import drjit as dr
+        dr.set_thread_count(args.threads)
+
+
 def positive(text):
     """argparse type: a whole number >= 1 (0 or less is a usage error, not "the default")."""
     try:

@@ -13,7 +13,7 @@ import json
 import os
 import sys
 
-from .boundary import add_debug, check_run, parser_of, run, variant_first
+from .boundary import add_debug, add_threads, check_run, parser_of, run, set_threads, variant_first
 
 # shorthand flags: flag -> (setting, how to read its text)
 FLAGS = {"steps": ("steps", int), "checkpoint_every": ("checkpoint_every", int), "seed": ("seed", int),
@@ -58,9 +58,11 @@ def main(argv=None):
     ap.add_argument("--clip-model", help="semantic: local CLIP model folder")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
+    add_threads(ap)
     add_debug(ap)
     args = ap.parse_args(argv)
     check_run(args.run)
+    set_threads(args)
     values = {}
     for flag, (name, kind) in FLAGS.items():
         text = getattr(args, flag)

@@ -8,7 +8,7 @@ checkpoints/ while it runs). The settings are listed below (defined in mi_voldis
 import json
 import sys
 
-from .boundary import add_debug, parser_of, run, variant_first
+from .boundary import add_debug, add_threads, parser_of, run, set_threads, variant_first
 
 
 def main(argv=None):
@@ -26,6 +26,7 @@ def main(argv=None):
     ap.add_argument("--factor", "--downscale", type=int, default=None, metavar="K",
                     help="read the images downscaled by K (images_K/; LLFF default: the smallest there is)")
     ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant")
+    add_threads(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
     ap.add_argument("--keep-checkpoints", action="store_true", help="keep RUN/checkpoints/last.npz (the final state)")
     add_debug(ap)
@@ -34,6 +35,7 @@ def main(argv=None):
         ap.error(f"--holdout must be 0 (no test views) or a positive k, got {args.holdout}")
     if args.factor is not None and args.factor < 1:
         ap.error(f"--factor must be a whole number >= 1, got {args.factor}")
+    set_threads(args)
     from mi_voldis.fit.run import run_fit
     cfg = FitConfig.from_sources(args.config, args.set)
     metrics = run_fit(args.dataset, args.out, cfg, args.resume, not args.quiet, args.format, args.holdout,
