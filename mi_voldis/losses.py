@@ -1,5 +1,6 @@
-"""The losses of the paper, one function each (Benaim et al. 2022). Fitting and every task call these;
-batching, statistics and PSNR logging stay with their callers.
+"""The losses of the paper, one function each (Benaim et al. 2022), and the distortion regulariser the
+fits add to them. Fitting and every task call these; batching, statistics and PSNR logging stay with
+their callers.
 
 All take Dr.Jit values of one batch of rays (or a rendered image) and return a one-element ``mi.Float``
 that ``dr.backward`` differentiates. Colours are premultiplied and display-encoded, as rendered; a
@@ -54,3 +55,12 @@ def semantic_loss(guide, edited, background, full, mask, bg_weight=0.5, l2_weigh
     cos_text, cos_bg = guide.cosines(mask * edited + (1.0 - mask) * background, edited, background)
     outside = dr.mean(dr.square((1.0 - mask) * (edited - full)).array)
     return (1.0 - cos_text) + bg_weight * (1.0 - cos_bg) + l2_weight * mi.Float(outside)
+
+
+def distortion_loss(per_ray, mask, object_gain=1.0):
+    """Mip-NeRF 360's distortion loss L_dist = sum_ij w_i w_j |s_i - s_j| + 1/3 sum_i w_i^2 delta_i per ray
+    (``per_ray``, from the march), averaged over the batch with the rays in the object mask ``mask``
+    weighted by ``object_gain``: mean_r (1 + (object_gain - 1) m_r) L_dist,r. The object is a surface, so
+    its rays should hold one peak: haze the full field leaves in front of it would otherwise stay in the
+    background field and go missing from the foreground (w_fg = w_full - w_bg)."""
+    return dr.mean((1.0 + (object_gain - 1.0) * mask) * per_ray)

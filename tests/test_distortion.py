@@ -45,3 +45,29 @@ def test_gradient_matches_finite_differences(layer):
     params.update()
     dr.backward(loss())
     assert np.abs(np.array(dr.grad(params[f"{other}.density"]))).max() == 0.0
+
+
+def test_object_rays_weigh_object_gain_times_as_much():
+    """distortion_loss weights the rays inside the object mask by object_gain and no others: its density
+    gradient on a half-masked batch is the unmasked half's plus object_gain times the masked half's, and
+    it passes finite differences."""
+    from mi_voldis.losses import distortion_loss
+    integ = integrator(random_field(3), random_field(4), samples=20)
+    o, d, u = axis_rays(32, seed=6)
+    params = mi.traverse(integ)
+    mask = mi.Float((np.arange(32) < 16).astype(np.float32))
+
+    def grad(loss_of):
+        dr.enable_grad(params["full.density"])
+        params.update()
+        dr.backward(loss_of(render_rays(integ, o, d, u, ("full",), distortion=("full",))["distortion"]["full"]))
+        g = np.array(dr.grad(params["full.density"])).ravel()
+        dr.disable_grad(params["full.density"])
+        params.update()
+        return g
+    inside, outside = grad(lambda per_ray: dr.mean(mask * per_ray)), grad(lambda per_ray: dr.mean((1 - mask) * per_ray))
+    weighted = grad(lambda per_ray: distortion_loss(per_ray, mask, 5.0))
+    assert np.abs(inside).max() > 0 and np.abs(outside).max() > 0
+    np.testing.assert_allclose(weighted, outside + 5.0 * inside, rtol=1e-4, atol=1e-6 * np.abs(weighted).max())
+    check_gradient(params, "full.density", lambda: distortion_loss(
+        render_rays(integ, o, d, u, ("full",), distortion=("full",))["distortion"]["full"], mask, 5.0))

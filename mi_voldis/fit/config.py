@@ -112,6 +112,9 @@ class FitConfig(Settings):
     distortion: float = setting(0.01, "weight of Mip-NeRF 360's distortion loss, ray positions in units of the "
                                       "scene box (pulls each ray's weights into one compact peak: no floaters)",
                                 low=0)
+    distortion_object: float = setting(5.0, "factor on the distortion loss of rays inside the object's masks: "
+                                            "one peak per object ray (haze left in front of the object would stay "
+                                            "in the background and go missing from the foreground)", low=0)
 
     # ---- modelling only what the scene needs
     brick: int = setting(8, "vertices along a brick's edge (sparse storage unit)", choices=(4, 8, 16))

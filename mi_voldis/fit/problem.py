@@ -7,7 +7,7 @@ import numpy as np
 from .. import exposure
 from ..device import from_numpy
 from ..field_state import neighbour_vertices
-from ..losses import background_loss, full_loss
+from ..losses import background_loss, distortion_loss, full_loss
 from ..optim.parameters import PackedParameters
 from ..regularizers import sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
@@ -116,7 +116,7 @@ class FieldFit:
         stats = {"samples": float(dr.sum(out["evaluated"])[0])}
         extent = float(np.max(self.state.hi - self.state.lo))  # ray positions in units of the scene box
         for layer in distortion:
-            loss += (cfg.distortion / extent) * dr.mean(out["distortion"][layer])
+            loss += (cfg.distortion / extent) * distortion_loss(out["distortion"][layer], mask, cfg.distortion_object)
 
         def photo(rgba, behind, view):  # what the photograph shows: the layer over the backdrop, colour-corrected
             pred = rgba[0] + (1.0 - rgba[1]) * behind
