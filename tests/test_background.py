@@ -209,6 +209,9 @@ def test_a_lifted_surface_looks_the_same_from_every_view():
     expected = colors[v[ok].astype(int), u[ok].astype(int)]
     got = in_b[0].reshape(-1, 3)[ok]
     assert np.abs(got - expected).mean() < 0.05
+    # nowhere allowed (no lifted point in the object's hull): the field's values stay, no key is written
+    kept, none = write_surface(field, space, points, rgb, lambda f: dr.zeros(mi.Float, f.vertices))
+    assert len(none) == 0 and np.array_equal(np.unique(np.array(kept.data)), np.unique(np.array(field.data)))
 
 
 SHADOW = (np.array([0.55, 0.0]), 0.15)  # centre (x, z) and radius of the sphere's shadow on the floor

@@ -1,6 +1,7 @@
 """The command-line programs: every one takes --quiet, the installed commands point at them, and a
 long job's progress reaches a log as lines when stderr is not a terminal."""
 import io
+import json
 import os
 
 import numpy as np
@@ -53,6 +54,35 @@ def test_a_removal_bench_row_names_its_strategy_and_the_boolean_setting_it_switc
         strategy_switch(row)
     with pytest.raises(ValueError, match="'guided object_front'"):
         strategy_switch("guided object_front")
+
+
+def test_a_rerun_of_the_removal_bench_keeps_the_refits_made_since_the_fit(tmp_path, monkeypatch):
+    """After an interruption the bench runs again: a strategy refitted after the scene's fit finished is
+    read back, one older than the fit (or missing) is refitted."""
+    from mi_voldis.bench import run as bench
+    fit = tmp_path / "runs" / "scene_0"
+    fit.mkdir(parents=True)
+    (fit / "metrics.json").write_text("{}")
+    refits = []
+
+    def refit(args, log):
+        refits.append(args[3])
+        os.makedirs(args[4], exist_ok=True)
+        with open(os.path.join(args[4], "metrics.json"), "w") as f:
+            json.dump({"strategy": args[3]}, f)
+        return 1.0
+    monkeypatch.setattr(bench, "child", refit)
+    rows = bench.strategy_rows(str(tmp_path), "scene", {"out": str(fit)}, ["guided", "clear"], str(tmp_path))
+    assert refits == ["guided", "clear"] and rows["clear"]["wall_seconds"] == 1.0
+    stale = tmp_path / "removal" / "scene" / "clear" / "metrics.json"
+    fitted = os.path.getmtime(fit / "metrics.json")
+    os.utime(stale, (fitted - 60, fitted - 60))
+    os.utime(tmp_path / "removal" / "scene" / "guided" / "metrics.json", (fitted + 60, fitted + 60))
+    refits.clear()
+    rows = bench.strategy_rows(str(tmp_path), "scene", {"out": str(fit)}, ["guided", "clear"], str(tmp_path))
+    assert refits == ["clear"] and rows["guided"] == {"strategy": "guided", "wall_seconds": None,
+                                                      "out": str(tmp_path / "removal" / "scene" / "guided"),
+                                                      "command": rows["guided"]["command"]}
 
 
 def test_the_benchmark_names_each_real_capture_it_skips(tmp_path, monkeypatch, capsys):

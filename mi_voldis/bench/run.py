@@ -237,6 +237,12 @@ def strategy_switch(strategy):
     return name, (["--set", f"{setting}={'true' if sign == '+' else 'false'}"] if setting else [])
 
 
+def refitted_since(metrics, run):
+    """``metrics`` (a strategy's metrics.json) was written after ``run``'s fit finished."""
+    fitted = os.path.join(run, "metrics.json")
+    return os.path.isfile(metrics) and os.path.getmtime(metrics) > os.path.getmtime(fitted)
+
+
 def strategy_rows(work, scene, run, strategies, logs):
     """Each of ``strategies`` refitted from ``run``'s full field: its metrics, wall seconds and command."""
     rows = {}
@@ -244,8 +250,10 @@ def strategy_rows(work, scene, run, strategies, logs):
         name, switch = strategy_switch(strategy)
         out = os.path.join(work, "removal", scene, strategy)
         args = ["-m", "mi_voldis.bench.strategies", run["out"], name, out] + switch
-        wall = child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
-        with open(os.path.join(out, "metrics.json")) as f:
+        done = os.path.join(out, "metrics.json")
+        reuse = refitted_since(done, run["out"])  # a rerun after an interruption keeps what it finished
+        wall = None if reuse else child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
+        with open(done) as f:
             rows[strategy] = {**json.load(f), "wall_seconds": wall, "out": out, "command": "python " + " ".join(args)}
     run.pop("curve", None)
     return rows

@@ -78,6 +78,8 @@ def write_surface(field, space, points, colors, allowed):
         j, i = np.divmod(rest, x)
         address = field.layout.address(*(from_numpy(mi.UInt32, a.astype(np.uint32)) for a in (i, j, k)))
         inside = np.array(dr.gather(mi.Float, allowed(field), address) > 0)
+        if not inside.any():  # every point lands where the background may not change
+            return field, keys[inside]
         address = dr.gather(mi.UInt32, address, from_numpy(mi.UInt32, np.flatnonzero(inside).astype(np.uint32)))
         mean, keys = mean[inside], keys[inside]
         data = dr.copy(field.data)
