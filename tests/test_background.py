@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import mi_voldis  # noqa: F401
-from mi_voldis.cameras import Camera, pixel_rays, project
+from mi_voldis.cameras import Camera, pixel_of, pixel_rays, project
 from mi_voldis.data.types import Dataset
 from mi_voldis.device import from_numpy
 from mi_voldis.field_state import new_field, vertex_positions
@@ -151,6 +151,54 @@ def test_visibility_of_a_plane_behind_an_occluder_from_two_cameras():
     clear = ~edge[iy, ix]
     assert expected[clear].any() and (~expected[clear]).any()  # both cases occur
     np.testing.assert_array_equal(seen[clear], expected[clear])
+
+
+def test_the_hull_takes_in_what_an_occluder_hides_but_nothing_behind_a_surface():
+    """A sphere (the object) on the plane y = -0.5 and a second sphere (an occluder) between it and
+    camera B; the masks hold the object where it is visible. The object's points camera A sees that
+    the occluder hides from B leave the plain hull (B votes against) but stay when B abstains, its
+    depth there being nearer (:func:`~mi_voldis.fit.hull.visual_hull` with depths); points inside the
+    floor under the object, hidden from both views, can win that vote too, and the surface test of
+    :func:`~mi_voldis.fit.hull.hull_behind_occluders` keeps them out; floor points B sees stay out."""
+    from mi_voldis.fit.hull import hull_behind_occluders, visual_hull
+    obj, r_obj = np.array([0.0, FLOOR_Y + 0.2, 0.0]), 0.2
+    occ, r_occ = np.array([1.0, FLOOR_Y + 0.22, 0.1]), 0.12
+    cams = [Camera(look_at(p, obj), 50.0, 80, 60) for p in ([0.0, 1.2, 2.0], [2.2, FLOOR_Y + 0.3, 0.2])]
+    depths, masks = [], []
+    for cam in cams:
+        py, px = np.mgrid[0:cam.height, 0:cam.width]
+        o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
+        t_obj = sphere_hit(o, d, obj, r_obj).reshape(cam.height, cam.width)
+        t_occ = sphere_hit(o, d, occ, r_occ).reshape(cam.height, cam.width)
+        depth = np.minimum(np.minimum(t_obj, t_occ), plane_depth(cam))
+        masks.append(t_obj <= depth)
+        depths.append(np.where(np.isfinite(depth), depth, np.nan))
+    masks = np.stack(masks)
+    a, b = cams
+    pixels = np.flatnonzero(masks[0])
+    o, d = pixel_rays(a, *(np.divmod(pixels, a.width)[::-1] + np.array(0.5)))
+    points = o + depths[0].reshape(-1)[pixels, None] * d  # the object's surface A sees
+    to_b = b.to_world[:3, 3]
+    dist = np.linalg.norm(points - to_b, axis=1)
+    hidden = sphere_hit(np.broadcast_to(to_b, points.shape), (points - to_b) / dist[:, None], occ, r_occ) < dist
+    ix, iy, framed = pixel_of(b, points)
+    hidden &= framed & ~dilate(masks[1], 1)[np.clip(iy, 0, b.height - 1), np.clip(ix, 0, b.width - 1)]
+    assert hidden.sum() > 20 and (~hidden).sum() > 20  # the occluder hides part of the object from B
+    plain = visual_hull(points, cams, masks, 0, 0.9)
+    assert not plain[hidden].any()
+    assert hull_behind_occluders(points, cams, masks, 0, 0.9, depths)[hidden].all()
+    # inside the floor, under the object: hidden from both views
+    g = np.stack(np.meshgrid(np.linspace(-0.08, 0.08, 5), np.linspace(-0.08, 0.08, 5)), -1).reshape(-1, 2)
+    under = np.stack([g[:, 0], np.full(len(g), FLOOR_Y - 0.05), g[:, 1]], axis=1)
+    assert visual_hull(under, cams, masks, 0, 0.9, depths).sum() > 5  # A's mask holds them, B abstains
+    assert not hull_behind_occluders(under, cams, masks, 0, 0.9, depths).any()
+    # on the floor beside the object, where B sees the floor unmasked
+    floor = np.flatnonzero((depths[1] == plane_depth(b)).reshape(-1))
+    o, d = pixel_rays(b, *(np.divmod(floor, b.width)[::-1] + np.array(0.5)))
+    beside = o + depths[1].reshape(-1)[floor, None] * d
+    beside = beside[np.linalg.norm(beside[:, [0, 2]] - obj[[0, 2]], axis=1) < 0.5]
+    assert len(beside) > 20
+    assert not hull_behind_occluders(beside, cams, masks, 0, 0.9, depths).any()
 
 
 def test_held_out_pixels_split_by_what_training_views_see():

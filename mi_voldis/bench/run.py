@@ -177,7 +177,7 @@ def make_data(scene, out, log_dir, quick):
 # ------------------------------------------------------------------------------------ 4. removal
 # bg_strategy values compared from one fitted full field; "STRATEGY+SETTING" / "STRATEGY-SETTING": with that
 # boolean setting on / off
-STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided-object_front", "guided+keep_seen"]
+STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided-object_front", "guided-hull_occluders", "guided+keep_seen"]
 
 
 def ground_truth_fits(work, scenes, results):
@@ -205,7 +205,7 @@ def save_results(results, report_dir, name):
 
 
 # on captures without ground truth: the previous default, the default and its variants
-CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-object_front", "guided+keep_seen"]
+CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-object_front", "guided-hull_occluders", "guided+keep_seen"]
 REMOVAL_CAPTURES = ["statue"]  # captures with object masks (../shared/data; skipped when absent)
 
 

@@ -13,20 +13,27 @@ from ..device import from_numpy
 from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, neighbour_vertices, vertex_positions
 from ..metrics import dilate
 from ..render import march
-from .hull import visual_hull
+from .hull import hull_behind_occluders, visual_hull
 from .visibility import in_view
 
 
-def hull_region(inputs, field, neighbours):
+def hull_region(inputs, field, neighbours, depth=None):
     """Per stored vertex of ``field``, 1 inside the object's visual hull (Float), and the hull vertices'
-    scene-space positions; the hull is grown by two vertices."""
+    scene-space positions; the hull is grown by two vertices. With ``depth`` (view -> full-field median
+    depth map) and ``hull_occluders`` it also takes in the points of
+    :func:`~mi_voldis.fit.hull.hull_behind_occluders`: the object's parts that occluders hide from many
+    views."""
     cfg, ds = inputs.cfg, inputs.ds
     pts_scene, real = vertex_positions(field)
     inside = np.zeros(len(pts_scene), bool)
     pts_world = inputs.space.to_world_np(pts_scene[real])
     diag = np.hypot(*ds.size)
-    inside[real] = visual_hull(pts_world, [ds.cameras[v] for v in ds.masked_train], ds.masks[ds.masked_train],
-                               int(np.ceil(cfg.hull_dilation * diag)), cfg.hull_min_views)
+    cams, masks = [ds.cameras[v] for v in ds.masked_train], ds.masks[ds.masked_train]
+    px = int(np.ceil(cfg.hull_dilation * diag))
+    inside[real] = visual_hull(pts_world, cams, masks, px, cfg.hull_min_views)
+    if depth is not None and cfg.hull_occluders:
+        inside[real] |= hull_behind_occluders(pts_world, cams, masks, px, cfg.hull_min_views,
+                                              [depth.get(v) for v in ds.masked_train])
     grown = dilate_vertices(mi.Bool(inside), neighbours, 2) & mi.Bool(real)
     return dr.select(grown, 1.0, 0.0), pts_scene[np.array(grown)]
 
@@ -112,13 +119,14 @@ def background_regions(inputs, state, neighbours=None):
     from .lift import training_depths
     cfg, full = inputs.cfg, state.fields["full"]
     neighbours = neighbours or neighbour_vertices(full)
-    hull, points = hull_region(inputs, full, neighbours)
+    depth = training_depths(inputs, state, median=True)
+    hull, points = hull_region(inputs, full, neighbours, depth)
     raw = dr.gather(mi.Float, full.data, dr.arange(mi.UInt32, full.vertices) * full.width)
     shown, front = masked_ray_cells(inputs, state, list(inputs.ds.masked_train))
     candidates = (raw > density_raw_for_alpha(cfg.object_alpha, voxel_of(full), full.density_scale)) & shown
     if cfg.object_front:
         candidates |= front
-    unseen = never_seen(inputs, full, hull > 0, training_depths(inputs, state, median=True))
+    unseen = never_seen(inputs, full, hull > 0, depth)
     return hull, points, unseen & candidates, unseen
 
 

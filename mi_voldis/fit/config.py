@@ -153,6 +153,10 @@ class FitConfig(Settings):
                                    low=0, high=1)
     hull_min_views: float = setting(0.9, "a cell is in the hull if inside the dilated mask in this fraction of "
                                          "the views that see it", above=0, high=1)
+    hull_occluders: bool = setting(True, "the hull also takes in the surface points some view sees inside its mask "
+                                         "that it holds once the views with an occluder in front of them abstain "
+                                         "from the vote: the object's parts occluders hide from many views "
+                                         "(bg_strategy 'harmonic', 'guided')")
     bg_ray_dilation: float = setting(0.15, "refit rays come from masks dilated by this fraction of the "
                                            "diagonal", low=0, high=1)
     object_alpha: float = setting(0.2, "hull voxels this opaque in the full field that no training view sees "
