@@ -4,7 +4,7 @@ Masks exclude occluders in front of the object, so a point of the object hidden 
 some view projects outside that view's mask; a cell is therefore kept when it is inside the dilated
 mask in at least a fraction ``min_fraction`` of the views that see it, not necessarily all; given
 the views' depth maps, a view whose surface at the point's pixel lies nearer than the point, outside
-its mask, does not vote (:func:`~mi_voldis.fit.background.hull_region` uses that near the hull).
+its mask, does not vote (:func:`hull_behind_occluders`, which the background's hull adds).
 """
 import numpy as np
 
