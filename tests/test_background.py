@@ -447,7 +447,7 @@ def test_what_some_view_sees_keeps_the_full_fields_density_so_the_foreground_is_
     voxel, centre = 2.0 / 39, np.array([0.0, FLOOR_Y + 0.3, 0.0])
     results = {}
     for keep in (True, False):
-        ds, full, inputs, state = guided_removal(tmp_path / str(keep), keep_seen=keep)
+        ds, full, inputs, state = guided_removal(tmp_path / str(keep), keep_seen=keep, keep_seen_gap=0)
         pts, real = vertex_positions(full)
         seen = real & (pts[:, 1] > FLOOR_Y + 0.5 * voxel) & sphere_seen_unmasked(ds, pts, voxel, centre, grow=3)
         changed = np.abs(density_of(state.fields["bg"]) - density_of(full))[seen]
@@ -461,6 +461,30 @@ def test_what_some_view_sees_keeps_the_full_fields_density_so_the_foreground_is_
     changed, spill = results[False]
     assert (changed > 0.5).sum() > 100
     assert spill.mean() > 0.05 and (spill > 0.1).mean() > 0.1
+
+
+def test_the_objects_soft_edge_leaves_with_it_though_views_see_it_unmasked(tmp_path):
+    """``keep_seen_gap``: the sphere's haze (three voxels thick outside it, as fits leave) is seen
+    unmasked beside its silhouette, so ``keep_seen`` alone keeps its density in the background, where
+    the foreground w_fg = w_full - w_bg misses it; with a gap of 4 vertices round the object's voxels
+    the haze is refilled like the unseen hull (its opacity falls to under half the haze's), while
+    what views see unmasked beyond the gap (more than 8 voxels from the sphere: the object's voxels
+    take in up to 3 voxels in front of it, ``object_front``) keeps the full
+    field's density exactly either way."""
+    from mi_voldis.field_state import density_of
+    voxel, centre, radius = 2.0 / 39, np.array([0.0, FLOOR_Y + 0.3, 0.0]), 0.3
+    kept = {}
+    for gap in (0, 4):
+        ds, full, inputs, state = guided_removal(tmp_path / str(gap), keep_seen=True, keep_seen_gap=gap)
+        pts, real = vertex_positions(full)
+        r = np.linalg.norm(pts - centre, axis=1)
+        above = real & (pts[:, 1] > FLOOR_Y + 2.5 * voxel) & sphere_seen_unmasked(ds, pts, voxel, centre, grow=3)
+        haze, beyond = above & (r >= radius) & (r < radius + 2.5 * voxel), above & (r > radius + 8 * voxel)
+        bg, fu = density_of(state.fields["bg"]), density_of(full)
+        assert haze.sum() > 50 and beyond.sum() > 1000
+        assert np.array_equal(bg[beyond], fu[beyond])
+        kept[gap] = np.logaddexp(0, bg[haze]).mean() / np.logaddexp(0, fu[haze]).mean()  # softplus density
+    assert kept[0] == pytest.approx(1.0) and kept[4] < 0.5, kept
 
 
 def object_cells(tmp_path, **settings):
@@ -594,7 +618,7 @@ def test_the_colour_prior_continues_the_wall_behind_not_the_occluder():
 def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only(tmp_path):
     """The prior's rays are exactly the grown masks' pixels of the masked training views (a view without
     a mask gives none), their colours each view's 2D inpainting there; the refit with it changes
-    nothing the views see outside the masks beyond what the harmonic refit changes."""
+    nothing the views see outside the masks by more than 2/255 beyond what the harmonic refit changes."""
     from mi_voldis.fit.fields import fit_integrator
     from mi_voldis.fit.guide import colour_prior
     from mi_voldis.fit.train import fit
@@ -629,7 +653,7 @@ def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only
     np.testing.assert_allclose(np.array(flat.colors).reshape(-1, 3)[pool], 0.25)
     for v in ds.test:
         out = ~dilate(ds.masks[v], int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size))) + 2)
-        assert np.abs(renders["guided"][v][out] - renders["harmonic"][v][out]).max() < 5e-3
+        assert np.abs(renders["guided"][v][out] - renders["harmonic"][v][out]).max() < 2 / 255
 
 
 def test_consistency_of_a_textured_floor_is_high_with_its_true_depth_and_drops_with_a_wrong_one():
@@ -663,12 +687,13 @@ def test_the_removal_score_rates_the_foreground_matte_against_the_masks_on_a_cap
     """The benchmark's removal score gives the foreground's IoU (coverage and EXR matte) against the
     exact coverage where there is ground truth, and against the masks on a capture without it (the
     same views, the same figures here: the synthetic scene's coverage is its masks); with ``keep_seen``
-    the sphere's foreground matches its masks."""
+    and no gap (the haze, outside the masks, stays in the background) the sphere's foreground matches
+    its masks."""
     import dataclasses
 
     from mi_voldis.bench.strategies import evaluate
     from mi_voldis.fit.fields import fit_integrator
-    ds, _, inputs, state = guided_removal(tmp_path, keep_seen=True)
+    ds, _, inputs, state = guided_removal(tmp_path, keep_seen=True, keep_seen_gap=0)
     integ = fit_integrator(inputs, state)
     truth, _ = evaluate(dataclasses.replace(ds, coverage=ds.masks.astype(np.float32)), integ, 0.03)
     capture, _ = evaluate(dataclasses.replace(ds, backgrounds=None), integ, 0.03)

@@ -43,13 +43,16 @@ def test_progress_is_lines_in_a_log(monkeypatch):
     assert quiet.getvalue() == ""
 
 
-def test_a_removal_bench_row_names_its_strategy_and_the_boolean_setting_it_switches():
-    """``STRATEGY``, ``STRATEGY+SETTING`` (on) and ``STRATEGY-SETTING`` (off) rows give the refit's
-    ``bg_strategy`` and its ``--set``; anything else is named in the error."""
+def test_a_removal_bench_row_names_its_strategy_and_the_setting_it_switches():
+    """``STRATEGY``, ``STRATEGY+SETTING`` (on), ``STRATEGY-SETTING`` (off) and ``STRATEGY+SETTING=VALUE``
+    rows give the refit's ``bg_strategy`` and its ``--set``; anything else is named in the error."""
     from mi_voldis.bench.run import CAPTURE_STRATEGIES, STRATEGIES, strategy_switch
     assert strategy_switch("guided") == ("guided", [])
     assert strategy_switch("guided+object_front") == ("guided", ["--set", "object_front=true"])
     assert strategy_switch("guided-object_front") == ("guided", ["--set", "object_front=false"])
+    assert strategy_switch("guided+keep_seen_gap=0") == ("guided", ["--set", "keep_seen_gap=0"])
+    with pytest.raises(ValueError, match="'guided-keep_seen_gap=0'"):
+        strategy_switch("guided-keep_seen_gap=0")
     for row in STRATEGIES + CAPTURE_STRATEGIES:
         strategy_switch(row)
     with pytest.raises(ValueError, match="'guided object_front'"):

@@ -209,7 +209,7 @@ def write_removal(results, report_dir, command):
           "--keep-checkpoints`, no setting); from its full field the background is fitted again with each "
           "`bg_strategy` (`python -m mi_voldis.bench.strategies RUN STRATEGY OUT --set ...`, every other "
           "setting as the run's, the background's as today's defaults; `STRATEGY+SETTING` / `STRATEGY-SETTING`: "
-          "that boolean setting on / off). Scores on the held-out views against "
+          "that boolean setting on / off; `STRATEGY+SETTING=VALUE`: that value). Scores on the held-out views against "
           "the ground-truth background: PSNR inside the masks (dilated by 3% of the diagonal) and outside "
           "them (the full field's outside them beside it), "
           "the object's residue (share of its pixels closer to its own colour than to the true background; "
@@ -259,8 +259,9 @@ def write_removal(results, report_dir, command):
         m = entry["fit"]["metrics"]
         md += [f"## {capture} (a capture: no ground truth)", "",
                f"Full field: held-out PSNR {m['held_out']['psnr']:.2f} dB, fit {m['seconds']['fit']:.0f} s. "
-               "The previous default (`harmonic`), the default and its variants (`STRATEGY+SETTING` / "
-               "`STRATEGY-SETTING`: with that setting on / off), with the view-to-view consistency on every "
+               "The earlier default `harmonic`, the default and its variants (`STRATEGY+SETTING` / "
+               "`STRATEGY-SETTING`: with that setting on / off; `STRATEGY+SETTING=VALUE`: with that value), with "
+               "the view-to-view consistency on every "
                "held-out view (PSNR inside the dilated masks; no ground truth to score against) and the "
                "foreground against the capture's masks (IoU of the coverage sum max(w_fg, 0) and of the EXR "
                "fg layer's matte, each at 0.5).", "",

@@ -176,8 +176,8 @@ def make_data(scene, out, log_dir, quick):
 
 # ------------------------------------------------------------------------------------ 4. removal
 # bg_strategy values compared from one fitted full field; "STRATEGY+SETTING" / "STRATEGY-SETTING": with that
-# boolean setting on / off
-STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided-object_front", "guided-hull_occluders", "guided+keep_seen"]
+# boolean setting on / off; "STRATEGY+SETTING=VALUE": with that value
+STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided-keep_seen", "guided+keep_seen_gap=0"]
 
 
 def ground_truth_fits(work, scenes, results):
@@ -205,7 +205,7 @@ def save_results(results, report_dir, name):
 
 
 # on captures without ground truth: the previous default, the default and its variants
-CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-object_front", "guided-hull_occluders", "guided+keep_seen"]
+CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-keep_seen", "guided+keep_seen_gap=0"]
 REMOVAL_CAPTURES = ["statue"]  # captures with object masks (../shared/data; skipped when absent)
 
 
@@ -229,11 +229,15 @@ def run_removal(work, report_dir, scenes=None):
 
 def strategy_switch(strategy):
     """A strategy row's ``bg_strategy`` and its extra arguments: "guided-object_front" ->
-    ("guided", ["--set", "object_front=false"])."""
-    match = re.fullmatch(r"(\w+)(?:([+-])(\w+))?", strategy)
+    ("guided", ["--set", "object_front=false"]), "guided+keep_seen_gap=0" -> ("guided", ["--set",
+    "keep_seen_gap=0"])."""
+    match = re.fullmatch(r"(\w+)(?:([+-])(\w+)|\+(\w+=[\w.]+))?", strategy)
     if match is None:
-        raise ValueError(f"strategy row {strategy!r}: expected STRATEGY, STRATEGY+SETTING or STRATEGY-SETTING")
-    name, sign, setting = match.groups()
+        raise ValueError(f"strategy row {strategy!r}: expected STRATEGY, STRATEGY+SETTING, STRATEGY-SETTING "
+                         "or STRATEGY+SETTING=VALUE")
+    name, sign, setting, assignment = match.groups()
+    if assignment:
+        return name, ["--set", assignment]
     return name, (["--set", f"{setting}={'true' if sign == '+' else 'false'}"] if setting else [])
 
 

@@ -87,19 +87,20 @@ def start_harmonic(inputs, state):
     extension of density and colour, so surfaces the object hides (the floor under it) continue
     through the hull, except in the object's own voxels (:func:`background_regions`), whose density
     is emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view sees.
-    With ``keep_seen`` only the hull voxels no training view sees unmasked are inpainted; the others keep
-    the full field's values (the fill's boundary). Returns the hull, the object's voxels and the hull
-    voxels no view sees unmasked (:func:`background_regions`)."""
+    With ``keep_seen`` only the hull voxels no training view sees unmasked, or within ``keep_seen_gap``
+    vertices of the object's, are inpainted; the others keep the full field's values (the fill's
+    boundary). Returns the hull, the object's voxels and those inpainted hull voxels
+    (:func:`background_regions`)."""
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
-    hull, points, obj, unseen = background_regions(inputs, state, neighbours)
-    values = harmonic_fill(full.data, full.width, dr.select(unseen, hull, 0.0) if inputs.cfg.keep_seen else hull,
+    hull, points, obj, refill = background_regions(inputs, state, neighbours)
+    values = harmonic_fill(full.data, full.width, dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull,
                            neighbours)
     # the object itself: empty, its colour the fill's (:func:`emptied`)
     filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
     state.fields["bg"] = emptied(inputs, filled, obj)
     state.hull_points = points
-    return hull, obj, unseen
+    return hull, obj, refill
 
 
 def voxel_of(field):
@@ -108,7 +109,9 @@ def voxel_of(field):
 
 def background_regions(inputs, state, neighbours=None):
     """The visual hull (Float per stored vertex), its vertices' positions, the object's own voxels
-    (Bool) and the hull vertices no training view sees unmasked (Bool, :func:`never_seen`). The
+    (Bool) and the hull vertices no training view sees unmasked (Bool, :func:`never_seen`) with those
+    within ``keep_seen_gap`` vertices of the object's voxels: the object's soft edge, which views see
+    unmasked beside its silhouette, goes with it (``keep_seen`` refills only these). The
     object's voxels are unseen hull vertices that either hold
     the object's density where a masked ray can show it (full-field opacity per voxel above
     ``object_alpha``, transmittance on some masked ray at least 5%) or, with ``object_front``, lie just
@@ -127,7 +130,9 @@ def background_regions(inputs, state, neighbours=None):
     if cfg.object_front:
         candidates |= front
     unseen = never_seen(inputs, full, hull > 0, depth)
-    return hull, points, unseen & candidates, unseen
+    obj = unseen & candidates
+    refill = unseen | (dilate_vertices(obj, neighbours, cfg.keep_seen_gap) & (hull > 0))
+    return hull, points, obj, refill
 
 
 def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chunk=1 << 16):

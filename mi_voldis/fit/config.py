@@ -167,12 +167,16 @@ class FitConfig(Settings):
                                        "sees unmasked are the object too, however faint: the prior cannot paint "
                                        "the background over the object, so the foreground layer covers it whole "
                                        "(bg_strategy 'harmonic', 'guided')")
-    keep_seen: bool = setting(False, "hull voxels some training view sees unmasked keep the full field's density "
-                                     "in bg (their colour is refitted; only the unseen voxels are filled and "
-                                     "reshaped; bg_strategy 'harmonic', 'guided'): outside the object the two "
-                                     "fields' densities agree, so the foreground layer w_fg = w_full - w_bg "
-                                     "holds the object alone; but the object's shadow and soft edge stay in the "
-                                     "background with that geometry")
+    keep_seen: bool = setting(True, "hull voxels some training view sees unmasked keep the full field's density "
+                                    "in bg (their colour is refitted; only the unseen voxels and those within "
+                                    "keep_seen_gap of the object's are filled and reshaped; bg_strategy "
+                                    "'harmonic', 'guided'): outside the object the two fields' densities agree, "
+                                    "so the foreground layer w_fg = w_full - w_bg holds the object alone; the "
+                                    "object's shadow stays in the background with that geometry")
+    keep_seen_gap: int = setting(4, "with keep_seen, hull vertices within this many vertices of the object's own "
+                                    "voxels are filled even where a view sees them unmasked: the object's soft "
+                                    "edge, which views see beside its silhouette, leaves with it (0: none)",
+                                 low=0)
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)

@@ -14,8 +14,9 @@ Phases (``bg_strategy``):
   ``object_front``, just before them on a masked ray) emptied
   (:func:`~mi_voldis.fit.background.start_harmonic`), and only hull cells are refitted with L_bg on
   rays near the masks. Outside the hull the two fields' densities are identical, so on a ray the
-  foreground w_full - w_bg is exactly zero until it reaches the hull; with ``keep_seen`` the hull
-  voxels some training view sees unmasked keep the full field's density too (their colour is refitted).
+  foreground w_full - w_bg is exactly zero until it reaches the hull; with ``keep_seen`` (default) the
+  hull voxels some training view sees unmasked keep the full field's density too (their colour is
+  refitted), except within ``keep_seen_gap`` vertices of the object's voxels (its soft edge).
 * ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
   training view (each view's photo inpainted in its mask, occluders in front of the object left out of
   the inpainting's sources; weight ``prior_weight`` against 1 for L_bg, :mod:`mi_voldis.fit.guide`):
@@ -127,12 +128,12 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         shaped = None  # where the density may change, if not wherever the colour may
         if harmonic:  # the object's own voxels stay empty
             if regions is None:
-                hull, _, obj, unseen = background_regions(inputs, state)
+                hull, _, obj, refill = background_regions(inputs, state)
             else:
-                hull, obj, unseen = regions
+                hull, obj, refill = regions
             free = dr.select(obj, 0.0, hull)
             if cfg.keep_seen:  # what some view sees keeps the full field's density
-                shaped = dr.select(unseen, free, 0.0)
+                shaped = dr.select(refill, free, 0.0)
         else:  # on the background's lattice (the lifted prior may have allocated bricks)
             free = cleared_region(inputs, state)
         effects = dataset.effects if cfg.bg_strategy == "guided" else None
