@@ -204,7 +204,7 @@ def save_results(results, report_dir, name):
     return results
 
 
-# on captures without ground truth: the previous default, the default and its variants
+# on captures without ground truth: the earlier default harmonic, the default and its variants
 CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-keep_seen", "guided+keep_seen_gap=0"]
 REMOVAL_CAPTURES = ["statue"]  # captures with object masks (../shared/data; skipped when absent)
 

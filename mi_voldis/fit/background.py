@@ -130,8 +130,9 @@ def background_regions(inputs, state, neighbours=None):
     if cfg.object_front:
         candidates |= front
     unseen = never_seen(inputs, full, hull > 0, depth)
-    obj = unseen & candidates
-    refill = unseen | (dilate_vertices(obj, neighbours, cfg.keep_seen_gap) & (hull > 0))
+    obj, refill = unseen & candidates, unseen
+    if cfg.keep_seen:  # the object's soft edge is refilled too
+        refill = unseen | (dilate_vertices(obj, neighbours, cfg.keep_seen_gap) & (hull > 0))
     return hull, points, obj, refill
 
 
