@@ -22,58 +22,20 @@ object's, so whatever stands in front of the object stays unmasked.
 import os
 
 import cv2
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
-from .cameras import pixel_of, pixel_rays
-from .device import from_numpy
+from .cameras import pixel_of
 from .fit.hull import visual_hull
 from .fit.visibility import pixel_points
 from .metrics import dilate, iou
-from .render import march
+from .render.surface import median_depth
 
 
 def surfaces(integrator, cameras):
-    """Per camera, the full field's median depth (H, W): the distance along each pixel-centre ray at
-    which its transmittance falls below a half, and where it does (H, W) bool. The median, unlike the
-    expected depth, is not pulled towards the camera or the far background by haze and half-transparent
-    voxels, so the surfaces of different views agree."""
+    """Per camera, the full field's median depth (H, W) and where its pixels have one (H, W) bool
+    (:func:`~mi_voldis.render.surface.median_depth`: unlike the expected depth, haze and half-transparent
+    voxels do not pull it, so the surfaces of different views agree)."""
     return [median_depth(integrator, cam) for cam in cameras]
-
-
-def median_depth(integrator, camera, chunk=1 << 16):
-    py, px = np.mgrid[0:camera.height, 0:camera.width]
-    o, d = pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
-    points, hit = median_points(integrator, o, d, chunk)
-    depth = np.where(hit, np.linalg.norm(points - o, axis=1), 0.0)
-    return depth.reshape(camera.height, camera.width), hit.reshape(camera.height, camera.width)
-
-
-def median_points(integrator, o, d, chunk=1 << 16):
-    """The full field's median point on each world ray (``o``, ``d`` (n, 3)): where its transmittance
-    falls below a half, world space (n, 3), and whether it does (n,) bool."""
-    plan = integrator.plan(("full",))
-    chain = plan.sources.full
-    points, hit = np.zeros((len(o), 3)), np.zeros(len(o), bool)
-    with dr.suspend_grad():
-        for s in range(0, len(o), chunk):
-            n = min(chunk, len(o) - s)
-            found = dr.zeros(mi.Float, 4 * n)
-            index = dr.arange(mi.UInt32, n)
-
-            def probe(p, w, active, depth):
-                before = dr.exp(-depth[chain])
-                cross = active & (before >= 0.5) & (before - w[chain] < 0.5)
-                q = plan.space.to_world(p)
-                for k, value in enumerate((q.x, q.y, q.z, mi.Float(1.0))):
-                    dr.scatter(found, value, index * 4 + k, cross)
-
-            rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o[s:s + n]), from_numpy(mi.Vector3f, d[s:s + n]))
-            march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
-            f = np.array(found).reshape(n, 4)
-            points[s:s + n], hit[s:s + n] = f[:, :3], f[:, 3] > 0
-    return points, hit
 
 
 def _points(camera, depth, valid):

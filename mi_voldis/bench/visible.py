@@ -8,7 +8,7 @@ field puts it: its depth along the pixel's ray.
 import numpy as np
 
 from ..fit.visibility import pixel_points, seen_elsewhere
-from ..masks3d import median_depth
+from ..render.surface import median_depth
 
 
 def training_surfaces(ds, integrator, count=24):

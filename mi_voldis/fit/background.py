@@ -149,7 +149,7 @@ def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chu
     the background, so a background drawn there would be its colour at its place and cover it in
     w_fg = w_full - w_bg; the band stays thin so that a mask wider than the object (its median point
     far behind) marks nothing but the space just before that far surface."""
-    from ..masks3d import median_points
+    from ..render.surface import median_points
     from .fields import fit_integrator
     ds, full = inputs.ds, state.fields["full"]
     integrator = fit_integrator(inputs, state)

@@ -24,9 +24,9 @@ import dataclasses
 import numpy as np
 
 from ..inpaint2d import inpainter
-from ..masks3d import median_depth
 from ..metrics import dilate
 from ..raybank import RayBank
+from ..render.surface import median_depth
 from .fields import fit_integrator
 
 

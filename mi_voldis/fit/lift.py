@@ -23,8 +23,8 @@ from ..cameras import pixel_rays
 from ..device import from_numpy
 from ..field_state import FieldState, density_raw_for_alpha, resample
 from ..inpaint2d import fill_disparity, inpainter
-from ..masks3d import median_depth
 from ..metrics import dilate
+from ..render.surface import median_depth
 from ..render.views import render_camera
 from .fields import fit_integrator
 from .hull import visual_hull

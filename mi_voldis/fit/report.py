@@ -8,12 +8,15 @@ from ..compositing import composite_channels
 from ..export import previews
 from ..io.images import write_png
 from ..metrics import dilate, iou, psnr, ssim
+from ..render.surface import front_weight
 from ..render.views import layer_channels, render_camera
 
 
 def evaluate(ds, integrator, hull_dilation):
     """Metrics on every held-out view, and the rendered layers of each (for previews). Background
-    metrics inside the masks use masks dilated by ``hull_dilation`` of the image diagonal."""
+    metrics inside the masks use masks dilated by ``hull_dilation`` of the image diagonal; ``haze`` is
+    the mean share of a ray's weight the full field spends well in front of the surface it shows
+    (:func:`~mi_voldis.render.surface.front_weight`)."""
     rows, renders = [], {}
     dil = int(np.ceil(hull_dilation * np.hypot(*ds.size)))
     for v in ds.test:
@@ -21,6 +24,8 @@ def evaluate(ds, integrator, hull_dilation):
         renders[v] = out
         full = np.clip(out["full"][0], 0, 1)
         row = {"view": int(v), "psnr": psnr(full, ds.images[v]), "ssim": ssim(full, ds.images[v])}
+        front, hit = front_weight(integrator, ds.cameras[v])  # the full field's haze (render.surface)
+        row["haze"] = float(front[hit].mean()) if hit.any() else float("nan")
         if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all():
             bg, gt = np.clip(out["bg"][0], 0, 1), ds.backgrounds[v]
             region = dilate(ds.masks[v], dil) if ds.masks is not None else None

@@ -1,0 +1,85 @@
+"""Where the full field's rays end: the median point of each ray, and the weight in front of it.
+
+The median point of a ray is where its transmittance T(t) = exp(-integral_0^t sigma) falls below a
+half. Unlike the expected depth it is not pulled towards the camera or the far background by haze
+and half-transparent voxels, so the surfaces of different views agree (masks, visibility, priors).
+The weight a ray spends well in front of it, sum_i w_i [t_i < (1 - margin) t_med], is haze or
+floaters: light the field explains with a semi-transparent veil instead of the surface, which both
+fields share, so the foreground w_fg = w_full - w_bg behind it is that much fainter.
+"""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..cameras import pixel_rays
+from ..device import from_numpy
+from . import march
+
+CHUNK = 1 << 16  # rays per launch
+
+
+def median_points(integrator, o, d, chunk=CHUNK):
+    """The full field's median point on each world ray (``o``, ``d`` (n, 3)): where its transmittance
+    falls below a half, world space (n, 3), and whether it does (n,) bool."""
+    plan = integrator.plan(("full",))
+    chain = plan.sources.full
+    points, hit = np.zeros((len(o), 3)), np.zeros(len(o), bool)
+    with dr.suspend_grad():
+        for s in range(0, len(o), chunk):
+            n = min(chunk, len(o) - s)
+            found = dr.zeros(mi.Float, 4 * n)
+            index = dr.arange(mi.UInt32, n)
+
+            def probe(p, w, active, depth):
+                before = dr.exp(-depth[chain])
+                cross = active & (before >= 0.5) & (before - w[chain] < 0.5)
+                q = plan.space.to_world(p)
+                for k, value in enumerate((q.x, q.y, q.z, mi.Float(1.0))):
+                    dr.scatter(found, value, index * 4 + k, cross)
+
+            rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o[s:s + n]), from_numpy(mi.Vector3f, d[s:s + n]))
+            march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
+            f = np.array(found).reshape(n, 4)
+            points[s:s + n], hit[s:s + n] = f[:, :3], f[:, 3] > 0
+    return points, hit
+
+
+def median_depth(integrator, camera, chunk=CHUNK):
+    """The full field's median depth through ``camera``'s pixel centres (H, W): distance along each
+    ray to its median point, 0 where it has none, and where it has one (H, W) bool."""
+    o, d = _camera_rays(camera)
+    points, hit = median_points(integrator, o, d, chunk)
+    depth = np.where(hit, np.linalg.norm(points - o, axis=1), 0.0)
+    return depth.reshape(camera.height, camera.width), hit.reshape(camera.height, camera.width)
+
+
+def front_weight(integrator, camera, margin=0.1, chunk=CHUNK):
+    """Per pixel of ``camera`` (H, W): the full field's weight on its ray more than ``margin`` times
+    the median depth in front of its median point, sum_i w_i [t_i < (1 - margin) t_med] (module
+    docstring), and whether the ray has a median point (H, W) bool (the weight is 0 where not)."""
+    o, d = _camera_rays(camera)
+    depth, hit = median_depth(integrator, camera, chunk)
+    reach = (1.0 - margin) * depth.ravel()
+    plan = integrator.plan(("full",))
+    chain = plan.sources.full
+    out = np.zeros(len(o))
+    with dr.suspend_grad():
+        for s in range(0, len(o), chunk):
+            n = min(chunk, len(o) - s)
+            total = dr.zeros(mi.Float, n)
+            index = dr.arange(mi.UInt32, n)
+            origin, limit = from_numpy(mi.Point3f, o[s:s + n]), from_numpy(mi.Float, reach[s:s + n])
+
+            def probe(p, w, active, _depth):
+                front = active & (dr.norm(plan.space.to_world(p) - origin) < limit)
+                dr.scatter_reduce(dr.ReduceOp.Add, total, w[chain], index, front)
+
+            rays = march.prepare_rays(plan, origin, from_numpy(mi.Vector3f, d[s:s + n]))
+            march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
+            out[s:s + n] = np.array(total)
+    return out.reshape(camera.height, camera.width), hit
+
+
+def _camera_rays(camera):
+    py, px = np.mgrid[0:camera.height, 0:camera.width]
+    return pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
