@@ -58,8 +58,8 @@ def front_weight(integrator, camera, margin=0.1, chunk=CHUNK):
     the median depth in front of its median point, sum_i w_i [t_i < (1 - margin) t_med] (module
     docstring), and whether the ray has a median point (H, W) bool (the weight is 0 where not)."""
     o, d = _camera_rays(camera)
-    depth, hit = median_depth(integrator, camera, chunk)
-    reach = (1.0 - margin) * depth.ravel()
+    points, hit = median_points(integrator, o, d, chunk)
+    reach = np.where(hit, (1.0 - margin) * np.linalg.norm(points - o, axis=1), 0.0)
     plan = integrator.plan(("full",))
     chain = plan.sources.full
     out = np.zeros(len(o))
@@ -77,7 +77,7 @@ def front_weight(integrator, camera, margin=0.1, chunk=CHUNK):
             rays = march.prepare_rays(plan, origin, from_numpy(mi.Vector3f, d[s:s + n]))
             march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
             out[s:s + n] = np.array(total)
-    return out.reshape(camera.height, camera.width), hit
+    return out.reshape(camera.height, camera.width), hit.reshape(camera.height, camera.width)
 
 
 def _camera_rays(camera):
