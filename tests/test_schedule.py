@@ -12,6 +12,7 @@ from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.schedule import (
     COST_EXPONENT,
     affordable_resolution,
+    at_least,
     rescale,
     resolution_at,
     schedule_of,
@@ -113,3 +114,34 @@ def test_the_optimisation_loop_follows_an_end_that_moves(steps):
     p = Problem()
     log = optimize(p, NoAdam(), steps=lambda: p.end, progress=False)
     assert p.seen == list(range(max(steps, 4))) and [r["step"] for r in log] == list(range(1, max(steps, 4) + 1))
+
+
+def test_at_least_stretches_the_steps_ahead_in_proportion_up_to_the_floor():
+    schedule, steps = [[0, 64], [200, 128], [400, 256]], 1000
+    assert at_least(schedule, steps, 200, 800) == (schedule, steps)  # already enough
+    stretched, total = at_least(schedule, steps, 200, 1800)  # 800 ahead -> 1600: each stage ahead doubles
+    assert stretched == [[0, 64], [200, 128], [600, 256]] and total == 1800
+    inner, total = at_least(schedule, steps, 300, 2100)  # 100 + 600 ahead -> 1800 (x 18 / 7)
+    assert inner[:2] == schedule[:2] and inner[2][0] == 300 + round(100 * 18 / 7) and total == 2100
+    odd, total = at_least([[0, 64], [10, 128], [20, 256]], 30, 10, 1001)  # 2 x 495.5 ahead
+    assert 1001 <= total <= 1001 + 2 and odd[:2] == [[0, 64], [10, 128]]  # off by a rounding per stage
+
+
+@pytest.mark.parametrize("minutes, floor", [("auto", 5000), (0.05, None)])
+def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked(minutes, floor):
+    from types import SimpleNamespace
+
+    from mi_voldis.fit.train import plan_schedule
+    cfg = FitConfig().replace(minutes=minutes, resolution=256, min_steps=5000)
+    ds = SimpleNamespace(train=list(range(4)), size=(100, 100))  # 0.04 Mpx: the 1.5-minute floor
+    state = SimpleNamespace(log=[{"step": s, "step_seconds": 0.01, "time": 0.01 * s} for s in range(1, 201)],
+                            plan=None, steps_full=None, schedule=None)
+    plan_schedule(SimpleNamespace(cfg=cfg, ds=ds), state, None)
+    budgeted = steps_for(stages(cfg, 64, 256), 0.01, state.plan["budget_seconds"] - 2.0)
+    assert state.plan.get("min_steps") == floor and state.schedule[-1][1] == 256
+    assert state.steps_full == (max(budgeted, 5000) if floor else max(budgeted, 400))
+    if floor:  # a rescaling that finds the budget spent keeps the floor
+        from mi_voldis.fit.train import replan
+        state.log += [{"step": s, "step_seconds": 1.0, "time": 1000.0} for s in range(201, 2001)]
+        replan(state, 2000)
+        assert state.steps_full == 5000 and state.plan["rescaled"][-1] == [2000, 5000]

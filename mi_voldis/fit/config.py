@@ -58,8 +58,12 @@ class FitConfig(Settings):
     # ---- schedule: coarse to fine, as data (mi_voldis/fit/schedule.py derives what is left null / 'auto')
     minutes: float | str | None = setting("auto", "time budget of the fit on this machine: the number of steps is "
                                                   "chosen to fill it ('auto': 2.5 min per million training pixels, "
-                                                  "1.5 to 10; null: steps_full)", check=_minutes_error)
+                                                  "1.5 to 10, and min_steps at least; null: steps_full)",
+                                        check=_minutes_error)
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
+    min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
+                                   "its budget growing to fit them (the resolution is chosen before it grows)",
+                             low=0)
     resolution: int | str = setting("auto", "final vertices along the scene box's longest side ('auto': a voxel "
                                             "about pixels_per_voxel pixels of the training views wide)",
                                     check=_resolution_error)

@@ -17,7 +17,11 @@ derived from the capture and the time budget once the first, coarse stage has ru
 * at the start of every later stage and every ``REPLAN_EVERY`` steps the steps still to come are
   rescaled to the budget that is left (:func:`rescale`), with the seconds a step took in the stage just
   finished or running: the cost model only has to be right one stage ahead, and within the last stage
-  not at all, so the fit ends on time on any machine and scene.
+  not at all, so the fit ends on time on any machine and scene;
+* with the default budget (``minutes`` 'auto') the fit runs at least ``min_steps`` steps
+  (:func:`at_least`, at planning and after every rescaling), the budget growing to fit them on a small
+  capture or a slow machine; the final resolution is chosen before it grows, so the extra time buys
+  steps on the grid the budget picked (a grid seen too few times stays hazy), not a finer one.
 """
 import drjit as dr
 import mitsuba as mi
@@ -130,12 +134,32 @@ def rescale(schedule, steps_full, step, seconds_per_step, measured_resolution, b
     ``seconds_per_step`` and a step at resolution R that times (R / measured)^COST_EXPONENT. What is
     ahead is the rest of the stage holding ``step`` and the stages after it; each keeps at least one
     step; the steps before ``step`` are unchanged."""
+    k, lengths = _ahead(schedule, steps_full, step)
+    levels = np.array([r for _, r in schedule[k:]], np.float64)
+    cost = seconds_per_step * (levels / measured_resolution) ** COST_EXPONENT
+    return _stretch(schedule, step, k, lengths, max(budget_left, 0.0) / float(np.dot(lengths, cost)))
+
+
+def at_least(schedule, steps_full, step, min_steps):
+    """(schedule, steps_full) with the steps from ``step`` on stretched in proportion, as in
+    :func:`rescale`, so that the fit runs at least ``min_steps`` steps (unchanged if it already does)."""
+    if steps_full >= min_steps or steps_full <= step:
+        return schedule, steps_full
+    k, lengths = _ahead(schedule, steps_full, step)
+    schedule, steps_full = _stretch(schedule, step, k, lengths, (min_steps - step) / float(lengths.sum()))
+    return schedule, max(steps_full, min_steps)  # rounding's shortfall goes to the last stage
+
+
+def _ahead(schedule, steps_full, step):
+    """Index of the stage holding ``step`` and the lengths (NumPy) of its rest and of the stages after it."""
     k = max(i for i, (start, _) in enumerate(schedule) if start <= step)
     starts = [step] + [start for start, _ in schedule[k + 1:]]
-    levels = np.array([r for _, r in schedule[k:]], np.float64)
-    lengths = np.diff(starts + [steps_full]).astype(np.float64)
-    cost = seconds_per_step * (levels / measured_resolution) ** COST_EXPONENT
-    factor = max(budget_left, 0.0) / float(np.dot(lengths, cost))
+    return k, np.diff(starts + [steps_full]).astype(np.float64)
+
+
+def _stretch(schedule, step, k, lengths, factor):
+    """The stages ahead of ``step`` (from stage ``k`` on, ``lengths`` long) scaled by ``factor``, each
+    keeping at least one step."""
     lengths = np.maximum(1, np.round(lengths * factor)).astype(int)
     new_starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
     ahead = [[int(s), r] for s, (_, r) in zip(new_starts[1:], schedule[k + 1:])]

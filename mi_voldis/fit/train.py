@@ -65,6 +65,7 @@ from .problem import FieldFit
 from .schedule import (
     RESERVED,
     affordable_resolution,
+    at_least,
     auto_minutes,
     capture_resolution,
     coarse_resolution,
@@ -220,7 +221,8 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
 
 def replan(state, step):
     """With a time budget, rescale the steps from ``step`` to the budget left (:func:`rescale`), timed on
-    the stage just finished (at a stage start) or on the one running; explicit step counts stay."""
+    the stage just finished (at a stage start) or on the one running, and never below the plan's
+    ``min_steps`` (:func:`at_least`); explicit step counts stay."""
     budget = (state.plan or {}).get("budget_seconds")
     if budget is None or step >= state.steps_full:
         return
@@ -236,6 +238,8 @@ def replan(state, step):
         return
     state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, float(np.median(rows)),
                                                state.schedule[timed][1], budget - state.log[-1]["time"])
+    state.schedule, state.steps_full = at_least(state.schedule, state.steps_full, step,
+                                                state.plan.get("min_steps", 0))
     state.plan.setdefault("rescaled", []).append([step, state.steps_full])
 
 
@@ -255,6 +259,8 @@ def plan_schedule(inputs, state, integrator):
         budget = minutes * 60.0 * (1.0 - RESERVED) - spent
         state.plan.update(minutes=float(minutes), coarse_step_seconds=seconds,
                           budget_seconds=minutes * 60.0 * (1.0 - RESERVED))
+        if cfg.minutes == "auto":
+            state.plan["min_steps"] = cfg.min_steps
         if cfg.resolution == "auto":
             state.plan["affordable_resolution"] = int(affordable_resolution(cfg, coarse, seconds, budget,
                                                                             inputs.bank.pixels))
@@ -264,7 +270,8 @@ def plan_schedule(inputs, state, integrator):
     if cfg.steps_full is not None:
         steps = cfg.steps_full
     else:
-        steps = max(2 * cfg.calibration_steps, steps_for(plan_stages, seconds, budget))
+        steps = max(2 * cfg.calibration_steps, steps_for(plan_stages, seconds, budget),
+                    state.plan.get("min_steps", 0))
     state.steps_full = steps
     state.schedule = schedule_of(plan_stages, steps, cfg.calibration_steps)
 
