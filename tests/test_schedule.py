@@ -12,7 +12,6 @@ from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.schedule import (
     COST_EXPONENT,
     affordable_resolution,
-    at_least,
     rescale,
     resolution_at,
     schedule_of,
@@ -116,15 +115,17 @@ def test_the_optimisation_loop_follows_an_end_that_moves(steps):
     assert p.seen == list(range(max(steps, 4))) and [r["step"] for r in log] == list(range(1, max(steps, 4) + 1))
 
 
-def test_at_least_stretches_the_steps_ahead_in_proportion_up_to_the_floor():
+def test_rescale_keeps_min_steps_in_the_same_proportions_when_the_budget_is_spent():
     schedule, steps = [[0, 64], [200, 128], [400, 256]], 1000
-    assert at_least(schedule, steps, 200, 800) == (schedule, steps)  # already enough
-    stretched, total = at_least(schedule, steps, 200, 1800)  # 800 ahead -> 1600: each stage ahead doubles
-    assert stretched == [[0, 64], [200, 128], [600, 256]] and total == 1800
-    inner, total = at_least(schedule, steps, 300, 2100)  # 100 + 600 ahead -> 1800 (x 18 / 7)
+    assert rescale(schedule, steps, 200, 0.01, 64, 1e9, 800)[1] > 1000  # the budget allows more: it rules
+    spent, total = rescale(schedule, steps, 200, 0.01, 64, 0.0, 1800)  # 800 ahead -> 1600: each stage x 2
+    assert spent == [[0, 64], [200, 128], [600, 256]] and total == 1800
+    again = rescale(spent, total, 300, 0.01, 128, -5.0, 1800)  # still over budget: the plan does not drift
+    assert again == (spent, total)
+    inner, total = rescale(schedule, steps, 300, 0.01, 128, 0.0, 2100)  # 100 + 600 ahead -> 1800 (x 18 / 7)
     assert inner[:2] == schedule[:2] and inner[2][0] == 300 + round(100 * 18 / 7) and total == 2100
-    odd, total = at_least([[0, 64], [10, 128], [20, 256]], 30, 10, 1001)  # 2 x 495.5 ahead
-    assert 1001 <= total <= 1001 + 2 and odd[:2] == [[0, 64], [10, 128]]  # off by a rounding per stage
+    short = rescale([[0, 64], [3, 128], [6, 256]], 9, 0, 0.01, 64, 0.0, 10)  # 3 x 3.33 rounds to 3 x 3
+    assert short == ([[0, 64], [3, 128], [6, 256]], 10)  # the step short goes to the last stage
 
 
 @pytest.mark.parametrize("minutes, floor", [("auto", 5000), (0.05, None)])
@@ -140,8 +141,11 @@ def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked(minute
     budgeted = steps_for(stages(cfg, 64, 256), 0.01, state.plan["budget_seconds"] - 2.0)
     assert state.plan.get("min_steps") == floor and state.schedule[-1][1] == 256
     assert state.steps_full == (max(budgeted, 5000) if floor else max(budgeted, 400))
-    if floor:  # a rescaling that finds the budget spent keeps the floor
+    if floor:  # rescalings that find the budget spent keep the floor and the stages' shares
         from mi_voldis.fit.train import replan
-        state.log += [{"step": s, "step_seconds": 1.0, "time": 1000.0} for s in range(201, 2001)]
-        replan(state, 2000)
-        assert state.steps_full == 5000 and state.plan["rescaled"][-1] == [2000, 5000]
+        planned = [start for start, _ in state.schedule]
+        for step in (300, 400, planned[2], planned[2] + 100):
+            state.log += [{"step": s, "step_seconds": 1.0, "time": 1000.0} for s in range(len(state.log) + 1, step + 1)]
+            replan(state, step)
+            assert state.steps_full == 5000 and state.plan["rescaled"][-1] == [step, 5000]
+            assert [start for start, _ in state.schedule] == planned

@@ -18,10 +18,10 @@ derived from the capture and the time budget once the first, coarse stage has ru
   rescaled to the budget that is left (:func:`rescale`), with the seconds a step took in the stage just
   finished or running: the cost model only has to be right one stage ahead, and within the last stage
   not at all, so the fit ends on time on any machine and scene;
-* with the default budget (``minutes`` 'auto') the fit runs at least ``min_steps`` steps
-  (:func:`at_least`, at planning and after every rescaling), the budget growing to fit them on a small
-  capture or a slow machine; the final resolution is chosen before it grows, so the extra time buys
-  steps on the grid the budget picked (a grid seen too few times stays hazy), not a finer one.
+* with the default budget (``minutes`` 'auto') the fit runs at least ``min_steps`` steps (at planning
+  and in every rescaling), overrunning the budget where it allows fewer (a small capture, a slow
+  machine); the final resolution is chosen from the budget alone, so the extra time buys steps on the
+  grid the budget picked (a grid seen too few times stays hazy), not a finer one.
 """
 import drjit as dr
 import mitsuba as mi
@@ -128,42 +128,24 @@ def schedule_of(plan_stages, steps, first):
 REPLAN_EVERY = 100  # steps between rescalings within a stage (and at every stage start)
 
 
-def rescale(schedule, steps_full, step, seconds_per_step, measured_resolution, budget_left):
+def rescale(schedule, steps_full, step, seconds_per_step, measured_resolution, budget_left, min_steps=0):
     """(schedule, steps_full) with the steps from ``step`` on stretched or shrunk in proportion so that
     their cost fills ``budget_left`` seconds, a step at ``measured_resolution`` having cost
     ``seconds_per_step`` and a step at resolution R that times (R / measured)^COST_EXPONENT. What is
     ahead is the rest of the stage holding ``step`` and the stages after it; each keeps at least one
-    step; the steps before ``step`` are unchanged."""
-    k, lengths = _ahead(schedule, steps_full, step)
-    levels = np.array([r for _, r in schedule[k:]], np.float64)
-    cost = seconds_per_step * (levels / measured_resolution) ** COST_EXPONENT
-    return _stretch(schedule, step, k, lengths, max(budget_left, 0.0) / float(np.dot(lengths, cost)))
-
-
-def at_least(schedule, steps_full, step, min_steps):
-    """(schedule, steps_full) with the steps from ``step`` on stretched in proportion, as in
-    :func:`rescale`, so that the fit runs at least ``min_steps`` steps (unchanged if it already does)."""
-    if steps_full >= min_steps or steps_full <= step:
-        return schedule, steps_full
-    k, lengths = _ahead(schedule, steps_full, step)
-    schedule, steps_full = _stretch(schedule, step, k, lengths, (min_steps - step) / float(lengths.sum()))
-    return schedule, max(steps_full, min_steps)  # rounding's shortfall goes to the last stage
-
-
-def _ahead(schedule, steps_full, step):
-    """Index of the stage holding ``step`` and the lengths (NumPy) of its rest and of the stages after it."""
+    step; the steps before ``step`` are unchanged. The fit runs at least ``min_steps`` steps in all:
+    where the budget allows fewer, the stages ahead stretch to them in the same proportions (one
+    factor for all, so a rescaling that finds the budget spent keeps the stages' shares)."""
     k = max(i for i, (start, _) in enumerate(schedule) if start <= step)
     starts = [step] + [start for start, _ in schedule[k + 1:]]
-    return k, np.diff(starts + [steps_full]).astype(np.float64)
-
-
-def _stretch(schedule, step, k, lengths, factor):
-    """The stages ahead of ``step`` (from stage ``k`` on, ``lengths`` long) scaled by ``factor``, each
-    keeping at least one step."""
+    levels = np.array([r for _, r in schedule[k:]], np.float64)
+    lengths = np.diff(starts + [steps_full]).astype(np.float64)
+    cost = seconds_per_step * (levels / measured_resolution) ** COST_EXPONENT
+    factor = max(max(budget_left, 0.0) / float(np.dot(lengths, cost)), (min_steps - step) / float(lengths.sum()))
     lengths = np.maximum(1, np.round(lengths * factor)).astype(int)
     new_starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
     ahead = [[int(s), r] for s, (_, r) in zip(new_starts[1:], schedule[k + 1:])]
-    return schedule[:k + 1] + ahead, int(step + lengths.sum())
+    return schedule[:k + 1] + ahead, max(int(step + lengths.sum()), min_steps)  # rounding short: the last stage
 
 
 def resolution_at(schedule, step):

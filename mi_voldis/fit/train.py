@@ -65,7 +65,6 @@ from .problem import FieldFit
 from .schedule import (
     RESERVED,
     affordable_resolution,
-    at_least,
     auto_minutes,
     capture_resolution,
     coarse_resolution,
@@ -222,7 +221,7 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
 def replan(state, step):
     """With a time budget, rescale the steps from ``step`` to the budget left (:func:`rescale`), timed on
     the stage just finished (at a stage start) or on the one running, and never below the plan's
-    ``min_steps`` (:func:`at_least`); explicit step counts stay."""
+    ``min_steps``; explicit step counts stay."""
     budget = (state.plan or {}).get("budget_seconds")
     if budget is None or step >= state.steps_full:
         return
@@ -237,9 +236,8 @@ def replan(state, step):
     if len(rows) < 10:
         return
     state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, float(np.median(rows)),
-                                               state.schedule[timed][1], budget - state.log[-1]["time"])
-    state.schedule, state.steps_full = at_least(state.schedule, state.steps_full, step,
-                                                state.plan.get("min_steps", 0))
+                                               state.schedule[timed][1], budget - state.log[-1]["time"],
+                                               state.plan.get("min_steps", 0))
     state.plan.setdefault("rescaled", []).append([step, state.steps_full])
 
 
