@@ -177,7 +177,8 @@ def make_data(scene, out, log_dir, quick):
 # ------------------------------------------------------------------------------------ 4. removal
 # bg_strategy values compared from one fitted full field; "STRATEGY+SETTING" / "STRATEGY-SETTING": with that
 # boolean setting on / off; "STRATEGY+SETTING=VALUE": with that value
-STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided-keep_seen", "guided+keep_seen_gap=0"]
+STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided-keep_seen", "guided+keep_seen_gap=0",
+              "guided+keep_seen_gap=4"]
 
 
 def ground_truth_fits(work, scenes, results):
@@ -205,7 +206,7 @@ def save_results(results, report_dir, name):
 
 
 # on captures without ground truth: the earlier default harmonic, the default and its variants
-CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-keep_seen", "guided+keep_seen_gap=0"]
+CAPTURE_STRATEGIES = ["harmonic", "guided", "guided-keep_seen", "guided+keep_seen_gap=0", "guided+keep_seen_gap=4"]
 REMOVAL_CAPTURES = ["statue"]  # captures with object masks (../shared/data; skipped when absent)
 
 

@@ -177,7 +177,7 @@ class FitConfig(Settings):
                                     "'harmonic', 'guided'): outside the object the two fields' densities agree, "
                                     "so the foreground layer w_fg = w_full - w_bg holds the object alone; the "
                                     "object's shadow stays in the background with that geometry")
-    keep_seen_gap: int = setting(4, "with keep_seen, hull vertices within this many vertices of the object's own "
+    keep_seen_gap: int = setting(1, "with keep_seen, hull vertices within this many vertices of the object's own "
                                     "voxels are filled even where a view sees them unmasked: the object's soft "
                                     "edge, which views see beside its silhouette, leaves with it (0: none)",
                                  low=0)
