@@ -62,8 +62,8 @@ class FitConfig(Settings):
                                         check=_minutes_error)
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
     min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
-                                   "its budget growing to fit them (the resolution is chosen before it grows)",
-                             low=0)
+                                   "overrunning the budget where it allows fewer (the resolution is chosen "
+                                   "from the budget alone)", low=0)
     resolution: int | str = setting("auto", "final vertices along the scene box's longest side ('auto': a voxel "
                                             "about pixels_per_voxel pixels of the training views wide)",
                                     check=_resolution_error)
