@@ -656,31 +656,70 @@ def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only
         assert np.abs(renders["guided"][v][out] - renders["harmonic"][v][out]).max() < 2 / 255
 
 
+CONSISTENCY_CAMS = [Camera(look_at([0.0, 1.0, 1.8], [0.0, FLOOR_Y, 0.0]), 50.0, 64, 48),
+                    Camera(look_at([0.4, 1.0, 1.7], [0.0, FLOOR_Y, 0.0]), 50.0, 64, 48)]
+BALL = (np.array([0.2, -0.25, 0.5]), 0.22)  # between the second camera and the floor
+
+
+def floor_and_ball(cam, ball=True):
+    """Exact image and depth of a smoothly textured floor, with a flat red ball in front if ``ball``."""
+    py, px = np.mgrid[0:cam.height, 0:cam.width]
+    o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
+    t = plane_depth(cam).ravel()
+    p = o + t[:, None] * d
+    rgb = np.stack([0.5 + 0.3 * np.sin(12 * p[:, 0]), 0.5 + 0.3 * np.cos(9 * p[:, 2]),
+                    0.5 + 0.2 * np.sin(8 * p[:, 0] + 5 * p[:, 2])], -1)
+    if ball:
+        hit = sphere_hit(o, d, *BALL)
+        rgb = np.where((hit < t)[:, None], [0.9, 0.1, 0.1], rgb)
+        t = np.minimum(t, hit)
+    return rgb.reshape(cam.height, cam.width, 3).astype(np.float32), t.reshape(cam.height, cam.width)
+
+
 def test_consistency_of_a_textured_floor_is_high_with_its_true_depth_and_drops_with_a_wrong_one():
-    """The removal metric warps each view's image with its depth into the nearest other view: the exact
-    images of a floor texture agree through the floor's depth, not through a depth 30% too far."""
+    """The removal metric samples each view's image through its nearest other view's depth: the exact
+    images of a floor texture agree through the floor's depth (up to bilinear sampling), less through
+    depths 3% too far in both views (within the z-test's tolerance, so scored)."""
     from types import SimpleNamespace
 
     from mi_voldis.tasks.removal import consistency
-    cams = [Camera(look_at([0.0, 1.0, 1.8], [0.0, FLOOR_Y, 0.0]), 50.0, 64, 48),
-            Camera(look_at([0.4, 1.0, 1.7], [0.0, FLOOR_Y, 0.0]), 50.0, 64, 48)]
-
-    def floor_image(cam):
-        py, px = np.mgrid[0:cam.height, 0:cam.width]
-        o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
-        p = o + plane_depth(cam).reshape(-1, 1) * d
-        tex = np.stack([0.5 + 0.3 * np.sin(3 * p[:, 0]), 0.5 + 0.3 * np.cos(2 * p[:, 2]),
-                        0.5 + 0.2 * np.sin(2 * p[:, 0] + p[:, 2])], -1)
-        return tex.reshape(cam.height, cam.width, 3).astype(np.float32)
-
-    ds = SimpleNamespace(cameras=cams, masks=[np.ones((48, 64), bool)] * 2)
-    images = {v: floor_image(c) for v, c in enumerate(cams)}
-    depth = {v: plane_depth(c) for v, c in enumerate(cams)}
-    assert all(np.isfinite(d).all() for d in depth.values())
+    ds = SimpleNamespace(cameras=CONSISTENCY_CAMS, masks=[np.ones((48, 64), bool)] * 2)
+    scene = [floor_and_ball(c, ball=False) for c in CONSISTENCY_CAMS]
+    images = {v: rgb for v, (rgb, _) in enumerate(scene)}
+    depth = {v: t for v, (_, t) in enumerate(scene)}
+    assert all(np.isfinite(t).all() for t in depth.values())
     exact = consistency(ds, [0, 1], images, depth, 0)
-    wrong = consistency(ds, [0, 1], images, {v: 1.3 * d for v, d in depth.items()}, 0)
-    assert exact > 30.0
-    assert wrong < exact - 8.0
+    wrong = consistency(ds, [0, 1], images, {v: 1.03 * t for v, t in depth.items()}, 0)
+    assert exact > 40.0
+    assert wrong < exact - 6.0
+
+
+def test_the_consistency_warp_leaves_out_what_an_occluder_hides_in_either_view():
+    """Reprojection with a z-test: view 1's floor that the ball hides from view 0 is left out (NaN),
+    not scored against the ball; every pixel kept (the ball's too, where both views see the same point
+    of it) matches the exact image up to bilinear sampling (RMS under 0.01); with no z-test (infinite
+    tolerance) the ball's colour is scored against the floor."""
+    from mi_voldis.tasks.removal import reproject
+    (rgb0, t0), (rgb1, t1) = (floor_and_ball(c) for c in CONSISTENCY_CAMS)
+    cam0, cam1 = CONSISTENCY_CAMS
+    floor0, floor1 = plane_depth(cam0), plane_depth(cam1)
+    hidden_in_1 = t1 < floor1 - 1e-6
+    assert 0.05 < hidden_in_1.mean() < 0.5 and (t0 < floor0 - 1e-6).any()
+    warped = reproject(rgb0, t0, cam0, cam1, t1)  # view 0 seen from camera 1
+    valid = np.isfinite(warped).all(axis=-1)
+    # the floor of view 1 that the ball hides from view 0: where the point's ray in view 0 hits the ball
+    py, px = np.mgrid[0:48, 0:64]
+    o, d = pixel_rays(cam1, px.ravel() + 0.5, py.ravel() + 0.5)
+    p = o + floor1.reshape(-1, 1) * d
+    to_p = p - cam0.to_world[:3, 3]
+    dist = np.linalg.norm(to_p, axis=1)
+    hidden_in_0 = (sphere_hit(np.broadcast_to(cam0.to_world[:3, 3], p.shape), to_p / dist[:, None], *BALL)
+                   < dist).reshape(48, 64) & ~hidden_in_1
+    assert hidden_in_0.sum() > 10 and not valid[hidden_in_0].any()
+    assert valid.mean() > 0.5
+    assert np.sqrt(np.mean((warped[valid] - rgb1[valid]) ** 2)) < 0.01  # 40 dB
+    loose = reproject(rgb0, t0, cam0, cam1, t1, tolerance=np.inf)
+    assert np.abs(loose[hidden_in_0] - rgb1[hidden_in_0]).max() > 0.3
 
 
 def test_the_removal_score_rates_the_foreground_matte_against_the_masks_on_a_capture(tmp_path):

@@ -77,8 +77,8 @@ def evaluate(ds, integrator, dilation_fraction):
     full_out = [psnr(np.clip(renders[v]["full"][0], 0, 1), ds.backgrounds[v], ~dilate(ds.masks[v], dil))
                 for v in scored]
     rows["volume"]["full_psnr_outside"] = float(np.mean(full_out)) if full_out else None
-    # the metric's reference: the ground-truth background itself, warped the same way (a correct but
-    # textured answer loses to a smooth one under nearest-pixel warping with no z-test)
+    # the metric's reference: the ground-truth background itself, warped the same way (what a correct
+    # answer scores through the volume's depth)
     rows["volume"]["truth_consistency_psnr"] = consistency(
         ds, scored, {v: np.clip(ds.backgrounds[v], 0, 1) for v in scored}, depth, dil) if scored else None
     rows["volume"]["seen_share"] = float(np.mean([seen[v].sum() / max(dilate(ds.masks[v], dil).sum(), 1)

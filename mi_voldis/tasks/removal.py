@@ -6,8 +6,9 @@ OpenCV contrib's FSR): PSNR / SSIM inside the masks, the
 object's residue (:func:`mi_voldis.metrics.object_residue`: the share of its pixels still closer to its
 own colour than to the true background), and
 view-to-view consistency: each held-out view's inpainting, reprojected into its nearest held-out
-neighbour with the background's depth, compared there inside the mask (a per-view 2D method has no
-reason to agree with itself across views; a volume does by construction).
+neighbour with the background's depth (bilinear, z-tested in both views), compared there inside the
+mask (a per-view 2D method has no reason to agree with itself across views; a volume does by
+construction).
 """
 import numpy as np
 
@@ -16,23 +17,44 @@ from ..inpaint2d import BASELINES, inpainter
 from ..metrics import dilate, object_residue, psnr, ssim
 
 
-def reproject(image_a, depth_a, cam_a, cam_b):
-    """Warp view a's pixels (with depths along its rays) into camera b: (H, W, 3) image, NaN where
-    nothing lands (nearest pixel, no z-test)."""
+def bilinear(image, x, y):
+    """``image`` (H, W, C) at continuous pixel indices (x, y) (n,) in [0, W - 1] x [0, H - 1]: (n, C),
+    and the four pixels it mixes ([(iy, ix, weight) ...])."""
+    h, w = image.shape[:2]
+    x0 = np.clip(np.floor(x), 0, max(w - 2, 0)).astype(int)
+    y0 = np.clip(np.floor(y), 0, max(h - 2, 0)).astype(int)
+    x1, y1 = np.minimum(x0 + 1, w - 1), np.minimum(y0 + 1, h - 1)
+    fx, fy = x - x0, y - y0
+    taps = [(y0, x0, (1 - fy) * (1 - fx)), (y0, x1, (1 - fy) * fx), (y1, x0, fy * (1 - fx)), (y1, x1, fy * fx)]
+    return sum(wt[:, None] * image[iy, ix] for iy, ix, wt in taps), taps
+
+
+def reproject(image_a, depth_a, cam_a, cam_b, depth_b, tolerance=0.03):
+    """View a's image seen from camera b (backward warp): each pixel of b's point at ``depth_b`` (distance
+    along b's ray) projected into a and sampled there bilinearly. (H_b, W_b, 3), NaN where b has no depth,
+    the point leaves a's frame, or a sees something else at any of the four pixels sampled (its depth
+    there differs from the point's distance by more than ``tolerance`` of it: the z-test, so an occluder
+    in either view, or its silhouette, is not scored as a disagreement)."""
+    hb, wb = depth_b.shape
+    py, px = np.mgrid[0:hb, 0:wb]
+    o, d = pixel_rays(cam_b, px.ravel() + 0.5, py.ravel() + 0.5)
+    zb = depth_b.ravel().astype(np.float64)
+    p = o + np.where(np.isfinite(zb) & (zb > 0), zb, 0.0)[:, None] * d
+    u, v, z = project(cam_a, p)
     h, w = depth_a.shape
-    py, px = np.mgrid[0:h, 0:w]
-    o, d = pixel_rays(cam_a, px.ravel() + 0.5, py.ravel() + 0.5)
-    u, v, z = project(cam_b, o + depth_a.reshape(-1, 1) * d)
-    ok = (z > 0) & (u >= 0) & (u < cam_b.width) & (v >= 0) & (v < cam_b.height) & (depth_a.ravel() > 0)
-    out = np.full((cam_b.height, cam_b.width, 3), np.nan, np.float32)
-    out[v[ok].astype(int), u[ok].astype(int)] = image_a.reshape(-1, 3)[ok]
-    return out
+    ok = np.isfinite(zb) & (zb > 0) & (z > 0) & (u >= 0.5) & (u <= w - 0.5) & (v >= 0.5) & (v <= h - 0.5)
+    sample, taps = bilinear(image_a, np.where(ok, u - 0.5, 0.0), np.where(ok, v - 0.5, 0.0))
+    dist = np.linalg.norm(p - np.asarray(cam_a.to_world, np.float64)[:3, 3], axis=1)
+    for iy, ix, _ in taps:
+        ok &= np.abs(depth_a[iy, ix] - dist) <= tolerance * dist
+    return np.where(ok[:, None], sample, np.nan).reshape(hb, wb, 3).astype(np.float32)
 
 
 def consistency(ds, views, images, depth, dil):
-    """Mean PSNR of each of ``views``' inpainting (``images[v]``) warped with ``depth[v]`` into its nearest
-    other view of ``views`` and compared there inside that view's mask (dilated by ``dil`` pixels);
-    None with fewer than two views."""
+    """Mean PSNR of each of ``views``' inpainting (``images[v]``) seen from its nearest other view u of
+    ``views`` through the depths (:func:`reproject`: u's pixel at ``depth[u]``, sampled in v where v's
+    ``depth[v]`` sees the same point), compared there with u's own inpainting inside u's mask (dilated by
+    ``dil`` pixels); None with fewer than two views."""
     values = []
     for v in views:
         others = [u for u in views if u != v]
@@ -40,7 +62,7 @@ def consistency(ds, views, images, depth, dil):
             continue
         pos = np.array([ds.cameras[u].to_world[:3, 3] for u in others])
         u = others[int(np.argmin(np.linalg.norm(pos - ds.cameras[v].to_world[:3, 3], axis=1)))]
-        warped = reproject(images[v], depth[v], ds.cameras[v], ds.cameras[u])
+        warped = reproject(images[v], depth[v], ds.cameras[v], ds.cameras[u], depth[u])
         region = dilate(ds.masks[u], dil) & np.isfinite(warped).all(axis=-1)
         if region.any():
             values.append(psnr(warped[region], images[u][region]))
