@@ -50,6 +50,15 @@ def reproject(image_a, depth_a, cam_a, cam_b, depth_b, tolerance=0.03):
     return np.where(ok[:, None], sample, np.nan).reshape(hb, wb, 3).astype(np.float32)
 
 
+def nearest_other(ds, views, v):
+    """The view of ``views`` other than ``v`` whose camera is nearest to v's (None if there is none)."""
+    others = [u for u in views if u != v]
+    if not others:
+        return None
+    pos = np.array([ds.cameras[u].to_world[:3, 3] for u in others])
+    return others[int(np.argmin(np.linalg.norm(pos - ds.cameras[v].to_world[:3, 3], axis=1)))]
+
+
 def consistency(ds, views, images, depth, dil):
     """Mean PSNR of each of ``views``' inpainting (``images[v]``) seen from its nearest other view u of
     ``views`` through the depths (:func:`reproject`: u's pixel at ``depth[u]``, sampled in v where v's
@@ -57,16 +66,29 @@ def consistency(ds, views, images, depth, dil):
     ``dil`` pixels); None with fewer than two views."""
     values = []
     for v in views:
-        others = [u for u in views if u != v]
-        if not others:
+        u = nearest_other(ds, views, v)
+        if u is None:
             continue
-        pos = np.array([ds.cameras[u].to_world[:3, 3] for u in others])
-        u = others[int(np.argmin(np.linalg.norm(pos - ds.cameras[v].to_world[:3, 3], axis=1)))]
         warped = reproject(images[v], depth[v], ds.cameras[v], ds.cameras[u], depth[u])
         region = dilate(ds.masks[u], dil) & np.isfinite(warped).all(axis=-1)
         if region.any():
             values.append(psnr(warped[region], images[u][region]))
     return float(np.mean(values)) if values else None
+
+
+def consistency_share(ds, views, depth, dil):
+    """Mean share of the dilated mask's pixels that :func:`consistency` compares (the z-test and the
+    frame leave the rest out); a property of the depths, the same for every image."""
+    shares = []
+    for v in views:
+        u = nearest_other(ds, views, v)
+        if u is None:
+            continue
+        blank = np.zeros(depth[v].shape + (3,), np.float32)
+        valid = np.isfinite(reproject(blank, depth[v], ds.cameras[v], ds.cameras[u], depth[u])).all(axis=-1)
+        region = dilate(ds.masks[u], dil)
+        shares.append((region & valid).sum() / max(region.sum(), 1))
+    return float(np.mean(shares)) if shares else None
 
 
 def run(run, output, progress=True):
