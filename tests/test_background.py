@@ -698,10 +698,10 @@ def test_the_consistency_warp_leaves_out_what_an_occluder_hides_in_either_view()
     """Reprojection with a z-test: view 1's floor that the ball hides from view 0 is left out (NaN),
     not scored against the ball; every pixel kept (the ball's too, where both views see the same point
     of it) matches the exact image up to bilinear sampling (RMS under 0.01); with no z-test (infinite
-    tolerance) the ball's colour is scored against the floor; the share compared is what is kept."""
+    tolerance) the ball's colour is scored against the floor; the shares sort what is left out."""
     from types import SimpleNamespace
 
-    from mi_voldis.tasks.removal import consistency_share, reproject
+    from mi_voldis.tasks.removal import NEARER, consistency_shares, depth_test, reproject
     (rgb0, t0), (rgb1, t1) = (floor_and_ball(c) for c in CONSISTENCY_CAMS)
     cam0, cam1 = CONSISTENCY_CAMS
     floor0, floor1 = plane_depth(cam0), plane_depth(cam1)
@@ -725,8 +725,12 @@ def test_the_consistency_warp_leaves_out_what_an_occluder_hides_in_either_view()
     # the share the metric compares: both directions' kept pixels, over whole-frame masks
     ds = SimpleNamespace(cameras=CONSISTENCY_CAMS, masks=[np.ones((48, 64), bool)] * 2)
     back = np.isfinite(reproject(rgb1, t1, cam1, cam0, t0)).all(axis=-1)
-    share = consistency_share(ds, [0, 1], {0: t0, 1: t1}, 0)
-    assert share == pytest.approx((valid.mean() + back.mean()) / 2) and share < 1.0
+    shares = consistency_shares(ds, [0, 1], {0: t0, 1: t1}, 0)
+    assert shares["compared"] == pytest.approx((valid.mean() + back.mean()) / 2)
+    assert sum(shares.values()) == pytest.approx(1.0)
+    # view 1's floor behind the ball from view 0: nearer; view 1's ball, where view 0 sees the floor: farther
+    code = depth_test(t0, cam0, cam1, t1)[2].reshape(48, 64)
+    assert (code[hidden_in_0] == NEARER).all() and shares["nearer"] > 0 and shares["farther"] > 0
 
 
 def test_the_removal_score_rates_the_foreground_matte_against_the_masks_on_a_capture(tmp_path):

@@ -293,6 +293,12 @@ def _baselines(methods):
     return [name for name in methods if name != "volume"]
 
 
+def _shares(shares):
+    if not shares:
+        return "-"
+    return f"{shares['compared']:.2f} ({shares['nearer']:.2f} / {shares['farther']:.2f})"
+
+
 def _split(row):
     return f"{_f(row.get('psnr_seen'), 2)} / {_f(row.get('psnr_unseen'), 2)}"
 
@@ -304,7 +310,7 @@ def _removal_targets(results):
     default = FitConfig().bg_strategy
     md = [f"## Default strategy (`{default}`) against the best 2D method", "",
           "| scene | PSNR in mask | best 2D | margin | margin over Telea / NS (target +2) | consistency | best 2D | "
-          "margin (target +3) | ground truth's consistency | share compared | outside - full field "
+          "margin (target +3) | ground truth's consistency | share compared (nearer / farther) | outside - full field "
           "(target >= -0.5) | coverage IoU (target 0.9) | residue |",
           "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     margins = []
@@ -321,7 +327,7 @@ def _removal_targets(results):
         md.append(f"| {scene} | {_f(v['psnr_mask'], 2)} | {_f(best, 2)} | {v['psnr_mask'] - best:+.2f} | "
                   f"{v['psnr_mask'] - classic:+.2f} | {_f(v['consistency_psnr'], 2)} | {_f(best_c, 2)} | "
                   f"{v['consistency_psnr'] - best_c:+.2f} | {_f(v.get('truth_consistency_psnr'), 2)} | "
-                  f"{_f(v.get('consistency_share'), 2)} | {v['psnr_outside'] - v['full_psnr_outside']:+.2f} | "
+                  f"{_shares(v.get('consistency_shares'))} | {v['psnr_outside'] - v['full_psnr_outside']:+.2f} | "
                   f"{_f(v.get('fg_coverage_iou'), 2)} | "
                   f"{_f(v['residue'], 2)} |")
     if margins:
@@ -329,8 +335,9 @@ def _removal_targets(results):
                    f"(from {min(margins):+.2f} to {max(margins):+.2f}). Ground truth's consistency: the "
                    "ground-truth background scored by the same metric (warped with the default's depth): "
                    "what a correct answer gets through the volume's geometry, the reference for the consistency "
-                   "column. Share compared: the part of the dilated masks the consistency scores (the rest "
-                   "leaves the neighbour's frame or fails the z-test).", ""]
+                   "column. Share compared: the part of the dilated masks the consistency scores; nearer / "
+                   "farther: the parts it leaves out because the other view's depth is nearer (an occluder) "
+                   "or farther (the views' depths disagree) than the point by more than 3%.", ""]
     return md
 
 

@@ -48,7 +48,7 @@ def evaluate(ds, integrator, dilation_fraction):
     from ..inpaint2d import BASELINES, inpainter
     from ..metrics import dilate, iou, object_residue, psnr
     from ..render.views import layer_channels, render_camera
-    from ..tasks.removal import consistency, consistency_share
+    from ..tasks.removal import consistency, consistency_shares
     from .visible import seen_pixels, training_surfaces
     dil = int(np.ceil(dilation_fraction * np.hypot(*ds.size)))
     scored = [v for v in ds.test if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all()]
@@ -81,7 +81,7 @@ def evaluate(ds, integrator, dilation_fraction):
     # answer scores through the volume's depth)
     rows["volume"]["truth_consistency_psnr"] = consistency(
         ds, scored, {v: np.clip(ds.backgrounds[v], 0, 1) for v in scored}, depth, dil) if scored else None
-    rows["volume"]["consistency_share"] = consistency_share(ds, tests, depth, dil)
+    rows["volume"]["consistency_shares"] = consistency_shares(ds, tests, depth, dil)
     rows["volume"]["seen_share"] = float(np.mean([seen[v].sum() / max(dilate(ds.masks[v], dil).sum(), 1)
                                                   for v in scored])) if scored else None
     # the foreground against the exact coverage, or on a capture against its masks: the coverage

@@ -29,12 +29,15 @@ def bilinear(image, x, y):
     return sum(wt[:, None] * image[iy, ix] for iy, ix, wt in taps), taps
 
 
-def reproject(image_a, depth_a, cam_a, cam_b, depth_b, tolerance=0.03):
-    """View a's image seen from camera b (backward warp): each pixel of b's point at ``depth_b`` (distance
-    along b's ray) projected into a and sampled there bilinearly. (H_b, W_b, 3), NaN where b has no depth,
-    the point leaves a's frame, or a sees something else at any of the four pixels sampled (its depth
-    there differs from the point's distance by more than ``tolerance`` of it: the z-test, so an occluder
-    in either view, or its silhouette, is not scored as a disagreement)."""
+KEPT, OUTSIDE, NEARER, FARTHER = range(4)  # how a pixel of one view fares in another (depth_test)
+
+
+def depth_test(depth_a, cam_a, cam_b, depth_b, tolerance=0.03):
+    """Where each pixel of camera b, its point at ``depth_b`` (distance along b's ray), lands in view a
+    and whether a sees that point: continuous pixel indices (x, y) into a, (n,) each, and a code per
+    pixel: KEPT; OUTSIDE (b has no depth there or the point leaves a's frame); NEARER / FARTHER (at one
+    of the four pixels around it a's depth is nearer / farther than the point's distance by more than
+    ``tolerance`` of it: an occluder in either view, a silhouette, or geometry the views disagree on)."""
     hb, wb = depth_b.shape
     py, px = np.mgrid[0:hb, 0:wb]
     o, d = pixel_rays(cam_b, px.ravel() + 0.5, py.ravel() + 0.5)
@@ -42,12 +45,23 @@ def reproject(image_a, depth_a, cam_a, cam_b, depth_b, tolerance=0.03):
     p = o + np.where(np.isfinite(zb) & (zb > 0), zb, 0.0)[:, None] * d
     u, v, z = project(cam_a, p)
     h, w = depth_a.shape
-    ok = np.isfinite(zb) & (zb > 0) & (z > 0) & (u >= 0.5) & (u <= w - 0.5) & (v >= 0.5) & (v <= h - 0.5)
-    sample, taps = bilinear(image_a, np.where(ok, u - 0.5, 0.0), np.where(ok, v - 0.5, 0.0))
+    inside = np.isfinite(zb) & (zb > 0) & (z > 0) & (u >= 0.5) & (u <= w - 0.5) & (v >= 0.5) & (v <= h - 0.5)
+    x, y = np.where(inside, u - 0.5, 0.0), np.where(inside, v - 0.5, 0.0)
+    taps = bilinear(depth_a[..., None], x, y)[1]
     dist = np.linalg.norm(p - np.asarray(cam_a.to_world, np.float64)[:3, 3], axis=1)
-    for iy, ix, _ in taps:
-        ok &= np.abs(depth_a[iy, ix] - dist) <= tolerance * dist
-    return np.where(ok[:, None], sample, np.nan).reshape(hb, wb, 3).astype(np.float32)
+    nearer = np.any([depth_a[iy, ix] < (1 - tolerance) * dist for iy, ix, _ in taps], axis=0)
+    farther = np.any([~(depth_a[iy, ix] <= (1 + tolerance) * dist) for iy, ix, _ in taps], axis=0)  # NaN too
+    code = np.where(~inside, OUTSIDE, np.where(nearer, NEARER, np.where(farther, FARTHER, KEPT)))
+    return x, y, code
+
+
+def reproject(image_a, depth_a, cam_a, cam_b, depth_b, tolerance=0.03):
+    """View a's image seen from camera b (backward warp): sampled bilinearly where :func:`depth_test`
+    keeps b's pixel, NaN elsewhere (so an occluder in either view, or its silhouette, is not scored as a
+    disagreement). (H_b, W_b, 3)."""
+    x, y, code = depth_test(depth_a, cam_a, cam_b, depth_b, tolerance)
+    sample = bilinear(image_a, x, y)[0]
+    return np.where((code == KEPT)[:, None], sample, np.nan).reshape(*depth_b.shape, 3).astype(np.float32)
 
 
 def nearest_other(ds, views, v):
@@ -76,19 +90,22 @@ def consistency(ds, views, images, depth, dil):
     return float(np.mean(values)) if values else None
 
 
-def consistency_share(ds, views, depth, dil):
-    """Mean share of the dilated mask's pixels that :func:`consistency` compares (the z-test and the
-    frame leave the rest out); a property of the depths, the same for every image."""
+def consistency_shares(ds, views, depth, dil):
+    """How :func:`depth_test` sorts the dilated masks' pixels in :func:`consistency`, mean over the view
+    pairs: ``{"compared", "outside", "nearer", "farther"}`` shares (summing to 1); a property of the
+    depths, the same for every image. None with fewer than two views."""
     shares = []
     for v in views:
         u = nearest_other(ds, views, v)
         if u is None:
             continue
-        blank = np.zeros(depth[v].shape + (3,), np.float32)
-        valid = np.isfinite(reproject(blank, depth[v], ds.cameras[v], ds.cameras[u], depth[u])).all(axis=-1)
-        region = dilate(ds.masks[u], dil)
-        shares.append((region & valid).sum() / max(region.sum(), 1))
-    return float(np.mean(shares)) if shares else None
+        code = depth_test(depth[v], ds.cameras[v], ds.cameras[u], depth[u])[2]
+        region = dilate(ds.masks[u], dil).ravel()
+        shares.append([(region & (code == c)).sum() / max(region.sum(), 1)
+                       for c in (KEPT, OUTSIDE, NEARER, FARTHER)])
+    if not shares:
+        return None
+    return dict(zip(("compared", "outside", "nearer", "farther"), map(float, np.mean(shares, axis=0))))
 
 
 def run(run, output, progress=True):
