@@ -17,16 +17,14 @@ from ..inpaint2d import BASELINES, inpainter
 from ..metrics import dilate, object_residue, psnr, ssim
 
 
-def bilinear(image, x, y):
-    """``image`` (H, W, C) at continuous pixel indices (x, y) (n,) in [0, W - 1] x [0, H - 1]: (n, C),
-    and the four pixels it mixes ([(iy, ix, weight) ...])."""
-    h, w = image.shape[:2]
+def bilinear_taps(h, w, x, y):
+    """The four pixels of an (h, w) image that bilinear interpolation at continuous pixel indices (x, y)
+    (n,) in [0, w - 1] x [0, h - 1] mixes: [(iy, ix, weight) ...]."""
     x0 = np.clip(np.floor(x), 0, max(w - 2, 0)).astype(int)
     y0 = np.clip(np.floor(y), 0, max(h - 2, 0)).astype(int)
     x1, y1 = np.minimum(x0 + 1, w - 1), np.minimum(y0 + 1, h - 1)
     fx, fy = x - x0, y - y0
-    taps = [(y0, x0, (1 - fy) * (1 - fx)), (y0, x1, (1 - fy) * fx), (y1, x0, fy * (1 - fx)), (y1, x1, fy * fx)]
-    return sum(wt[:, None] * image[iy, ix] for iy, ix, wt in taps), taps
+    return [(y0, x0, (1 - fy) * (1 - fx)), (y0, x1, (1 - fy) * fx), (y1, x0, fy * (1 - fx)), (y1, x1, fy * fx)]
 
 
 KEPT, OUTSIDE, NEARER, FARTHER = range(4)  # how a pixel of one view fares in another (depth_test)
@@ -47,7 +45,7 @@ def depth_test(depth_a, cam_a, cam_b, depth_b, tolerance=0.03):
     h, w = depth_a.shape
     inside = np.isfinite(zb) & (zb > 0) & (z > 0) & (u >= 0.5) & (u <= w - 0.5) & (v >= 0.5) & (v <= h - 0.5)
     x, y = np.where(inside, u - 0.5, 0.0), np.where(inside, v - 0.5, 0.0)
-    taps = bilinear(depth_a[..., None], x, y)[1]
+    taps = bilinear_taps(h, w, x, y)
     dist = np.linalg.norm(p - np.asarray(cam_a.to_world, np.float64)[:3, 3], axis=1)
     nearer = np.any([depth_a[iy, ix] < (1 - tolerance) * dist for iy, ix, _ in taps], axis=0)
     farther = np.any([~(depth_a[iy, ix] <= (1 + tolerance) * dist) for iy, ix, _ in taps], axis=0)  # NaN too
@@ -60,7 +58,7 @@ def reproject(image_a, depth_a, cam_a, cam_b, depth_b, tolerance=0.03):
     keeps b's pixel, NaN elsewhere (so an occluder in either view, or its silhouette, is not scored as a
     disagreement). (H_b, W_b, 3)."""
     x, y, code = depth_test(depth_a, cam_a, cam_b, depth_b, tolerance)
-    sample = bilinear(image_a, x, y)[0]
+    sample = sum(wt[:, None] * image_a[iy, ix] for iy, ix, wt in bilinear_taps(*image_a.shape[:2], x, y))
     return np.where((code == KEPT)[:, None], sample, np.nan).reshape(*depth_b.shape, 3).astype(np.float32)
 
 
