@@ -60,3 +60,49 @@ def test_the_median_depth_is_the_wall_and_the_fog_in_front_weighs_as_beer_lamber
         assert front.max() < 1e-3
     else:
         assert front.mean() > 0.4  # about 1 - exp(-0.8 * 0.7) = 0.43
+
+
+def wall_and_box(with_box):
+    """Fields over [-1, 1]^3: the opaque wall at z >= WALL_Z, with ``with_box`` an opaque box in front of
+    it (|x|, |y| < 0.3, -0.5 <= z <= -0.1)."""
+    lo, hi = -np.ones(3), np.ones(3)
+    field = new_field(lo, hi, RES, 0, -20.0, 1.0 / VOXEL)
+    pts, real = vertex_positions(field)
+    values = np.array(field.data).reshape(-1, field.width)
+    block = values[: field.layout.vertices_per_brick].copy()
+    box = (np.abs(pts[:, 0]) < 0.3) & (np.abs(pts[:, 1]) < 0.3) & (pts[:, 2] >= -0.5) & (pts[:, 2] <= -0.1)
+    solid = (pts[:, 2] >= WALL_Z) | (box & with_box)
+    values[:, 0] = np.where(real & solid, np.log(np.expm1(200.0 * VOXEL)), -20.0)
+    values[: field.layout.vertices_per_brick] = block
+    field.data = from_numpy(mi.Float, values.ravel())
+    return field
+
+
+@pytest.mark.parametrize("removed", [True, False])
+def test_mask_surfaces_tell_a_background_that_continues_the_wall_from_one_that_keeps_the_object(removed):
+    """The background's median depth (``layer='bg'``) behind a box: with the box removed it ends on the
+    wall, as the full field does around the mask, and its points leave the box's visual hull (the side
+    cameras, 1.5 apart, see that wall outside their masks); with the box kept it ends on the box,
+    inside the hull, where the full field does."""
+    from types import SimpleNamespace
+
+    from mi_voldis.bench.visible import mask_surfaces
+    props = integrator_properties(SceneSpace("world"), samples=512, step_size=0.25 * VOXEL)
+    full = wall_and_box(True)
+    integrator = build_integrator({"full": full.plugin(), "bg": wall_and_box(not removed).plugin()}, props)
+    cams = [Camera(look_at([x, 0.0, -3.0], [0.0, 0.0, 0.0]), 30.0, 32, 24) for x in (0.0, -1.5, 1.5)]
+    only_full = build_integrator({"full": full.plugin(), "bg": full.plugin()}, props)
+    masks = []
+    for cam in cams:
+        depth, hit = median_depth(only_full, cam)
+        masks.append(hit & (depth < 3.0))  # the box's front face is 2.5 away, the wall 3.5
+    ds = SimpleNamespace(cameras=cams, masks=np.array(masks), masked_train=np.array([1, 2]))
+    assert ds.masks[0].sum() > 20
+    out = mask_surfaces(ds, integrator, [0], 1, 0.9)
+    assert 2.4 < out["object"] < 2.6 and 3.4 < out["ring"] < 3.7
+    if removed:
+        assert abs(out["background"] - out["ring"]) < 0.1
+        assert out["in_hull"] < 0.5
+    else:
+        assert abs(out["background"] - out["object"]) < 2 * VOXEL
+        assert out["in_hull"] > 0.95

@@ -11,7 +11,8 @@ views against the ground-truth background (in-mask = masks dilated by ``hull_dil
 the masks (and there, apart, where some training view sees the background unmasked and where none
 does: :mod:`mi_voldis.bench.visible`) and outside them (beside the full field's outside them), the
 object's residue, the foreground's IoU (its coverage and its EXR matte; on a capture without ground
-truth against its masks) and the view-to-view consistency; the 2D inpainters of
+truth against its masks), the view-to-view consistency and where the background stands behind
+the object (:func:`~mi_voldis.bench.visible.mask_surfaces`); the 2D inpainters of
 :data:`~mi_voldis.inpaint2d.BASELINES` on each held-out view itself (they see the photo around the
 mask) beside them. MASKED_DATASET: fit the
 background with that copy of RUN's dataset (other object masks, e.g. from scripts/make_masks.py);
@@ -42,14 +43,14 @@ def refit_config(run, strategy, sets=()):
     return FitConfig.from_sources(os.path.join(run, "config.json"), list(sets), bg_strategy=strategy, **background)
 
 
-def evaluate(ds, integrator, dilation_fraction):
+def evaluate(ds, integrator, dilation_fraction, hull_min_views=0.9):
     """Per-method rows (the volume's background, then each 2D baseline) and the volume's held-out renders."""
     from ..compositing import composite_channels
     from ..inpaint2d import BASELINES, inpainter
     from ..metrics import dilate, iou, object_residue, psnr
     from ..render.views import layer_channels, render_camera
     from ..tasks.removal import consistency, consistency_shares
-    from .visible import seen_pixels, training_surfaces
+    from .visible import mask_surfaces, seen_pixels, training_surfaces
     dil = int(np.ceil(dilation_fraction * np.hypot(*ds.size)))
     scored = [v for v in ds.test if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all()]
     # without ground truth: the consistency alone, on every held-out view (none without masks either)
@@ -82,6 +83,8 @@ def evaluate(ds, integrator, dilation_fraction):
     rows["volume"]["truth_consistency_psnr"] = consistency(
         ds, scored, {v: np.clip(ds.backgrounds[v], 0, 1) for v in scored}, depth, dil) if scored else None
     rows["volume"]["consistency_shares"] = consistency_shares(ds, tests, depth, dil)
+    # where the background stands behind the object (a fill in the hull, the surfaces around, or a hole)
+    rows["volume"]["mask_surfaces"] = mask_surfaces(ds, integrator, tests, dil, hull_min_views)
     rows["volume"]["seen_share"] = float(np.mean([seen[v].sum() / max(dilate(ds.masks[v], dil).sum(), 1)
                                                   for v in scored])) if scored else None
     # the foreground against the exact coverage, or on a capture against its masks: the coverage
@@ -133,7 +136,7 @@ def main(argv=None):
     seconds = time.perf_counter() - t0
     os.remove(checkpoint)
     integrator = fit_integrator(inputs, state)
-    rows, renders = evaluate(ds, integrator, cfg.hull_dilation)
+    rows, renders = evaluate(ds, integrator, cfg.hull_dilation, cfg.hull_min_views)
     if not renders:  # nothing to score: previews of the first held-out views all the same
         from ..render.views import render_camera
         renders = {v: render_camera(integrator, ds.cameras[v], ("bg",)) for v in list(ds.test)[:PREVIEWS]}

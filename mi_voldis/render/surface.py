@@ -18,11 +18,11 @@ from . import march
 CHUNK = 1 << 16  # rays per launch
 
 
-def median_points(integrator, o, d, chunk=CHUNK):
-    """The full field's median point on each world ray (``o``, ``d`` (n, 3)): where its transmittance
-    falls below a half, world space (n, 3), and whether it does (n,) bool."""
-    plan = integrator.plan(("full",))
-    chain = plan.sources.full
+def median_points(integrator, o, d, chunk=CHUNK, layer="full"):
+    """The median point of ``layer``'s field ('full' or 'bg') on each world ray (``o``, ``d`` (n, 3)):
+    where its transmittance falls below a half, world space (n, 3), and whether it does (n,) bool."""
+    plan = integrator.plan((layer,))
+    chain = getattr(plan.sources, layer)
     points, hit = np.zeros((len(o), 3)), np.zeros(len(o), bool)
     with dr.suspend_grad():
         for s in range(0, len(o), chunk):
@@ -44,11 +44,12 @@ def median_points(integrator, o, d, chunk=CHUNK):
     return points, hit
 
 
-def median_depth(integrator, camera, chunk=CHUNK):
-    """The full field's median depth through ``camera``'s pixel centres (H, W): distance along each
-    ray to its median point, 0 where it has none, and where it has one (H, W) bool."""
+def median_depth(integrator, camera, chunk=CHUNK, layer="full"):
+    """The median depth of ``layer``'s field ('full' or 'bg') through ``camera``'s pixel centres
+    (H, W): distance along each ray to its median point, 0 where it has none, and where it has one
+    (H, W) bool."""
     o, d = _camera_rays(camera)
-    points, hit = median_points(integrator, o, d, chunk)
+    points, hit = median_points(integrator, o, d, chunk, layer)
     depth = np.where(hit, np.linalg.norm(points - o, axis=1), 0.0)
     return depth.reshape(camera.height, camera.width), hit.reshape(camera.height, camera.width)
 
