@@ -415,7 +415,8 @@ def test_a_shadow_given_as_effect_masks_leaves_with_the_object_and_the_floor_kee
     from mi_voldis.fit.fields import fit_integrator
     errors, shadow = {}, None
     for given in (False, True):
-        ds, full, inputs, state = guided_removal(tmp_path / str(given), shadow=True, effects=given, steps_bg=150)
+        ds, full, inputs, state = guided_removal(tmp_path / str(given), shadow=True, effects=given, steps_bg=150,
+                                                 shadow_contrast=0.0)  # without: no shadow search either
         shadow = shadow if ds.effects is None else ds.effects
         bg = fit_integrator(inputs, state)
         errors[given] = [np.abs(np.clip(render_camera(bg, ds.cameras[v], ("bg",))["bg"][0], 0, 1)
@@ -434,6 +435,22 @@ def test_a_shadow_given_as_effect_masks_leaves_with_the_object_and_the_floor_kee
     assert np.array_equal(density_of(state.fields["bg"])[under], density_of(full)[under])
     colour = np.array(state.fields["bg"].data).reshape(-1, full.width)[:, 1:4]
     assert (colour[under] > np.array(full.data).reshape(-1, full.width)[under, 1:4]).mean() > 0.5  # brighter
+
+
+def test_a_shadow_no_light_explains_is_not_searched_into_the_removal(tmp_path):
+    """The synthetic sphere is one flat colour, lit by nothing (no side of it brighter), and its
+    'shadow' a disc on the floor: no light is kept, the search's record says why, and the background
+    is the one fitted with the search off (to the rounding of the adjoint's scatter-adds, which run in
+    any order)."""
+    runs = {}
+    for contrast in (0.0, 0.5):
+        ds, full, inputs, state = guided_removal(tmp_path / str(contrast), shadow=True, effects=False,
+                                                 shadow_contrast=contrast)
+        runs[contrast] = (np.array(state.fields["bg"].data), state.prior)
+    record = runs[0.5][1]["shadow"]
+    assert record is not None and not record["kept"] and record["shading"] < 0.1
+    assert "shadow" not in (runs[0.0][1] or {})
+    np.testing.assert_allclose(runs[0.5][0], runs[0.0][0], atol=1e-4)  # two runs of either differ by ~1e-6
 
 
 def test_what_some_view_sees_keeps_the_full_fields_density_so_the_foreground_is_the_object_alone(tmp_path):

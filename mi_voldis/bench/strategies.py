@@ -31,7 +31,7 @@ PREVIEWS = 4  # held-out views previewed when the dataset has neither ground tru
 # the background strategies' own settings (bg_strategy first): a refit takes today's defaults for them, so
 # that a run fitted under older defaults is scored with the strategy the default command runs now
 BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
-                       "object_front", "keep_seen", "keep_seen_gap", "hull_occluders")
+                       "object_front", "keep_seen", "keep_seen_gap", "hull_occluders", "shadow_contrast")
 
 
 def refit_config(run, strategy, sets=()):

@@ -177,6 +177,13 @@ class FitConfig(Settings):
                                     "'harmonic', 'guided'): outside the object the two fields' densities agree, "
                                     "so the foreground layer w_fg = w_full - w_bg holds the object alone; the "
                                     "object's shadow stays in the background with that geometry")
+    shadow_contrast: float = setting(0.5, "the object's shadow leaves with it (bg_strategy 'guided', a dataset "
+                                          "without effect masks): a light is searched from the object's shape, "
+                                          "its shading and the photos (mi_voldis.fit.shadow), and its shadow "
+                                          "taken as effect masks when the photos step down across the shadow's "
+                                          "edge by at least this much in log luminance (0.5: 39% darker) in "
+                                          "every channel, pooled and in two thirds of the views that see it; "
+                                          "0: off", low=0)
     keep_seen_gap: int = setting(1, "with keep_seen, hull vertices within this many vertices of the object's own "
                                     "voxels are filled even where a view sees them unmasked: the object's soft "
                                     "edge, which views see beside its silhouette, leaves with it (0: none)",

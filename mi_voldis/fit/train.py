@@ -21,7 +21,8 @@ Phases (``bg_strategy``):
   training view (each view's photo inpainted in its mask, occluders in front of the object left out of
   the inpainting's sources; weight ``prior_weight`` against 1 for L_bg, :mod:`mi_voldis.fit.guide`):
   what no view sees becomes the views' consensus instead of the harmonic fill's blend. With effect masks
-  (the dataset's ``effects``: the object's shadow on the rest of the scene), their pixels leave L_bg and
+  (the dataset's ``effects``: the object's shadow on the rest of the scene; without them, the shadow
+  found from the object's shape and the photos, :mod:`mi_voldis.fit.shadow`), their pixels leave L_bg and
   join the prior's, and the surfaces under them are refitted in colour alone
   (:func:`~mi_voldis.fit.background.effect_cells`): the shadow leaves with the object, the floor stays.
 * ``lift``: the same full field; the background starts as a copy of it with the part of the object's
@@ -36,6 +37,8 @@ Where the background has no density its colour is unconstrained, yet c_fg = c_fu
 after fitting, background colour is set to black wherever its voxel opacity is negligible, so that
 there c_fg = c_full (``empty_color_alpha``).
 """
+import dataclasses
+import sys
 import time
 
 import drjit as dr
@@ -74,6 +77,7 @@ from .schedule import (
     steps_for,
 )
 from .sh_degree import choose_sh_degree
+from .shadow import find_shadow
 from .state import FitState
 
 
@@ -137,6 +141,15 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         else:  # on the background's lattice (the lifted prior may have allocated bricks)
             free = cleared_region(inputs, state)
         effects = dataset.effects if cfg.bg_strategy == "guided" else None
+        if effects is None and cfg.bg_strategy == "guided" and cfg.shadow_contrast > 0:
+            effects, light = find_shadow(inputs, state)  # the object's shadow, from its shape and the photos
+            state.prior = {**(state.prior or {}), "shadow": light}
+            if effects is not None:
+                inputs = dataclasses.replace(inputs, ds=dataclasses.replace(dataset, effects=effects))
+                if progress:
+                    print(f"note: the object's shadow found ({100 * (1 - np.exp(-light['contrast'])):.0f}% darker "
+                          f"than beside it, light at {np.round(light['light'], 2).tolist()}): it leaves with the "
+                          "object (--set shadow_contrast=0 keeps it)", file=sys.stderr)
         if effects is not None:  # the surfaces under the object's shadow: their colour alone is refitted
             shaped = free if shaped is None else shaped
             free = dr.select(effect_cells(inputs, state), 1.0, free)
