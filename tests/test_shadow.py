@@ -134,3 +134,15 @@ def test_a_dark_patch_the_objects_shading_contradicts_is_not_its_shadow():
         cos = np.dot(found.position - CENTRE, LIGHT - CENTRE) / np.linalg.norm(found.position - CENTRE) / \
             np.linalg.norm(LIGHT - CENTRE)
         assert not found.kept or cos < np.cos(np.radians(30))
+
+
+def test_a_light_among_the_points_maps_those_ahead_of_it():
+    """A candidate light inside the object's cloud (the refinement may step there): the map holds the
+    points ahead of it only, stays finite, and a point behind the light is never shadowed."""
+    cams, depths, masks, _, photos = scene()
+    surface = ObjectSurface.of(cams, photos, masks, depths)
+    smap = ShadowMap(CENTRE + np.array([0.0, 0.2, 0.0]), CENTRE, surface.points, surface.spacing)
+    assert np.isfinite(smap.half) and np.isfinite(smap.near).any()
+    assert not smap.shadowed((CENTRE + np.array([0.0, 2.0, 0.0]))[None])[0]  # behind the light
+    near = smap.near[np.isfinite(smap.near)]
+    assert near.min() > smap.radius and near.max() < 2 * RADIUS  # only the sphere's far side, ahead of it

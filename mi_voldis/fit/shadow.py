@@ -101,14 +101,17 @@ class ShadowMap:
         self.axis = axis / np.linalg.norm(axis)
         self.u, self.v = _frame(self.axis)
         x, y, dist = self._project(points)
+        # a light among the points maps those ahead of it, within 80 degrees of its axis
+        ahead = (dist > self.radius) & (np.maximum(np.abs(x), np.abs(y)) < np.tan(np.radians(80.0)))
+        x, y, dist = x[ahead], y[ahead], dist[ahead]
         ball = self.radius / dist  # a ball's angular radius (tangent plane units)
-        self.half = float(np.max(np.maximum(np.abs(x), np.abs(y)) + ball)) * 1.01
+        self.half = float(np.max(np.maximum(np.abs(x), np.abs(y)) + ball, initial=1e-3)) * 1.01
         self.texel = 2.0 * self.half / size
         near = np.full((size, size), np.inf, np.float32)
         ix, iy = self._texel(x, y)
         np.minimum.at(near, (np.clip(iy, 0, size - 1), np.clip(ix, 0, size - 1)), dist.astype(np.float32))
         # each point covers the texels within its ball's angular radius: a min filter of that reach
-        reach = int(np.ceil(np.median(ball) / self.texel))
+        reach = int(np.ceil(np.median(ball) / self.texel)) if len(ball) else 0
         if reach > 0:
             disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * reach + 1, 2 * reach + 1))
             near = cv2.erode(np.where(np.isfinite(near), near, BIG).astype(np.float32), disc)
