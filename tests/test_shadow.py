@@ -3,7 +3,7 @@ a sphere over the floor y = FLOOR_Y, a point light, a textured floor, cameras ar
 import numpy as np
 
 from mi_voldis.cameras import Camera, look_at, pixel_rays
-from mi_voldis.fit.shadow import ObjectSurface, ShadowMap, ShadowViews, find_light, shadow_masks
+from mi_voldis.fit.shadow import MASK_EDGE_PX, ObjectSurface, ShadowMap, ShadowViews, find_light, shadow_masks
 from mi_voldis.io.images import linear_to_srgb
 
 FLOOR_Y = -0.5
@@ -111,6 +111,22 @@ def test_find_light_recovers_a_point_light_and_its_shadow_masks():
     union = sum((f | s).sum() for f, s in zip(found, shadows))
     assert inter / union > 0.7
     assert not any((f & m).any() for f, m in zip(found, masks))
+
+
+def test_a_shadow_cast_straight_down_is_found_against_the_silhouette():
+    """A light above the sphere: its shadow shows only as a crescent against the silhouette (at most
+    about 6 pixels out in these views); the views score it from ``MASK_EDGE_PX`` beyond the masks, so
+    the light is found and kept."""
+    above = np.array([0.05, 2.5, 0.0])
+    cams, depths, masks, shadows, photos = scene(light=above)
+    views = ShadowViews.of(cams, photos, masks, depths, mask_grow=MASK_EDGE_PX)
+    light, occluder = find_light(views, ObjectSurface.of(cams, photos, masks, depths), min_contrast=0.5)
+    assert light.kept and light.contrast > 0.8
+    cos = np.dot(light.position - CENTRE, above - CENTRE) / np.linalg.norm(light.position - CENTRE) / np.linalg.norm(
+        above - CENTRE)
+    assert cos > np.cos(np.radians(10))
+    found = shadow_masks(light, occluder, cams, masks, depths, grow=1)
+    assert sum((f & s).sum() for f, s in zip(found, shadows)) / sum((f | s).sum() for f, s in zip(found, shadows)) > 0.5
 
 
 def test_no_light_is_kept_without_a_shadow():

@@ -203,6 +203,8 @@ def _section_header(title, results, command):
 def write_removal(results, report_dir, command):
     """reports/removal.md: one table per scene (strategy rows, OpenCV beside), previews copied beside it.
     Returns the file's path."""
+    from ..fit.config import FitConfig
+    default = FitConfig().bg_strategy
     os.makedirs(report_dir, exist_ok=True)
     md = _section_header("Removal by background strategy", results, command) + [
           "Each scene is fitted once with the default command (`scripts/train.py DATA --out RUN "
@@ -250,6 +252,9 @@ def write_removal(results, report_dir, command):
             md += ["", f"`lift`: reference views {prior['reference_views']}, hole pixels inpainted and lifted "
                        f"{prior['hole_pixels']}, of which another view sees unmasked {shares}; "
                        f"{prior['vertices_emptied']} vertices emptied, {prior['vertices_written']} written."]
+        shadow = (entry["strategies"].get(default, {}).get("prior") or {}).get("shadow")
+        if shadow:
+            md += ["", _shadow_line(shadow)]
         sheet = _removal_sheet(fit["out"], entry["strategies"], os.path.join(report_dir, f"removal_{scene}.png"))
         if sheet:
             md += ["", f"![{scene}]({sheet}) Rows: photo, ground-truth background, OpenCV Telea, "
@@ -301,6 +306,14 @@ def _shares(shares):
 
 def _split(row):
     return f"{_f(row.get('psnr_seen'), 2)} / {_f(row.get('psnr_unseen'), 2)}"
+
+
+def _shadow_line(shadow):
+    """The object's shadow as the default's search found it (:mod:`mi_voldis.fit.shadow`), in one line."""
+    light = ", ".join(f"{x:.2f}" for x in shadow["light"])
+    verdict = "kept: its shadow joins the effect masks" if shadow["kept"] else "not kept"
+    return (f"Shadow search of the default: best light ({light}), edge contrast {shadow['contrast']:.2f}, views "
+            f"agreeing {shadow['views_agree']:.2f}, shading {shadow['shading']:.2f}; {verdict}.")
 
 
 def _removal_targets(results):

@@ -177,8 +177,8 @@ def make_data(scene, out, log_dir, quick):
 # ------------------------------------------------------------------------------------ 4. removal
 # bg_strategy values compared from one fitted full field; "STRATEGY+SETTING" / "STRATEGY-SETTING": with that
 # boolean setting on / off; "STRATEGY+SETTING=VALUE": with that value
-STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided-keep_seen", "guided+keep_seen_gap=0",
-              "guided+keep_seen_gap=4"]
+STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided+shadow_contrast=0", "guided-keep_seen",
+              "guided+keep_seen_gap=0", "guided+keep_seen_gap=4"]
 
 
 def ground_truth_fits(work, scenes, results):

@@ -11,9 +11,10 @@ object itself.
 
 Which p. The photos are darker in a shadow than beside it, with the step at its edge, in every colour
 channel (a change of material steps some channels up). For each candidate light, every view's
-predicted shadow S (outside the object's dilated mask) is compared across its edge: the band E of S
-within ``EDGE_PX`` of its edge against the band R just outside it, in ell = log(linear RGB + eps), on
-the channel that steps down least,
+predicted shadow S (outside the object's mask grown by ``MASK_EDGE_PX``: a shadow cast straight down
+lies against the silhouette) is compared across its edge: the band E of S within ``EDGE_PX`` of its
+edge against the band R just outside it, in ell = log(linear RGB + eps), on the channel that steps
+down least,
 
     contrast = mean_R ell - mean_E ell,      t = contrast / sqrt(var_R / |R| + var_E / |E|)
 
@@ -48,6 +49,7 @@ SUPPORT = 0.5  # candidates whose t reaches this share of the best t compete on 
 MIN_AGREE = 2 / 3  # a light is kept when its shadow steps down by min_contrast in this share of the views in sight
 MIN_SHARE = 0.1  # a view scores a predicted shadow only if this much of the object's area is in sight
 EDGE_PX = 2  # width of the bands either side of a predicted shadow's edge, in scored pixels
+MASK_EDGE_PX = 2  # pixels beyond a mask no shadow is scored on (the object's antialiased edge in the photos)
 EPS = 1e-3  # log luminance floor (linear)
 MIN_SHADING = 0.2  # a candidate light must leave the object this much brighter (log) on its side than on the other
 SIDE_SHARE = 0.1  # the object's seen points on either side of the light's terminator, at least (else unjudged)
@@ -153,7 +155,8 @@ class ShadowMap:
 @dataclass
 class ShadowViews:
     """The scored pixels of some views: per view the world points of its strided pixels (NaN where no
-    surface), their log linear RGB (n, 3), and which may hold the shadow (outside the dilated mask)."""
+    surface), their log linear RGB (n, 3), and which may hold the shadow (outside the mask grown by
+    ``mask_grow`` pixels)."""
     points: list
     ell: list
     free: list
@@ -307,7 +310,7 @@ def find_light(views, surface, min_contrast, min_agree=MIN_AGREE, max_points=200
     for q, s in zip(cands, scores):
         if better(s, sc):
             p, sc = q, s
-    if p is None:  # no light shades the object: nothing to search around
+    if p is None:  # no light shades the object, or no shadow darkens the photos: nothing to search around
         return ShadowLight(centre, 0.0, 0.0, 0.0, 0.0, False), (obj, radius, centre)
     spread, factor = np.sqrt(4.0 * np.pi / DIRECTIONS), 2.0  # the coarse grid's spacing (radians, ratio)
     for _ in range(3):
@@ -369,7 +372,7 @@ def find_shadow(inputs, state, views=12):
         return None, None
     pick = np.unique(np.linspace(0, len(masked) - 1, min(views, len(masked))).round().astype(int))
     scored = ShadowViews.of([cams[k] for k in pick], [ds.images[masked[k]] for k in pick], [masks[k] for k in pick],
-                            [depths[k] for k in pick], grow)
+                            [depths[k] for k in pick], MASK_EDGE_PX)
     light, occluder = find_light(scored, surface, cfg.shadow_contrast, seed=cfg.seed)
     if not light.kept:
         return None, light.record()

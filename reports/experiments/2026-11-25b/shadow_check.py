@@ -57,7 +57,7 @@ def main(run, *lights):
     surface = surface.inside(visual_hull(surface.points, cams, masks, grow, cfg.hull_min_views, depths))
     pick = np.unique(np.linspace(0, len(masked) - 1, min(12, len(masked))).round().astype(int))
     views = S.ShadowViews.of([cams[k] for k in pick], [ds.images[masked[k]] for k in pick], [masks[k] for k in pick],
-                             [depths[k] for k in pick], grow)
+                             [depths[k] for k in pick], S.MASK_EDGE_PX)
     obj, spacing = surface.points, surface.spacing
     if len(obj) > 20000:  # as find_light subsamples
         spacing *= np.sqrt(len(obj) / 20000)
