@@ -1,13 +1,15 @@
 """The shadow search on a fitted run, against the ground truth where there is one.
 
-    python reports/experiments/2026-11-25b/shadow_check.py RUN [X,Y,Z ...]
+    [MASK_EDGE_PX=N] python reports/experiments/2026-11-25b/shadow_check.py RUN [X,Y,Z ...]
 
 RUN: a fit kept with --keep-checkpoints. Prints the light the default search finds (its record), the
 IoU / precision / recall of its effect masks against the ground truth's (photo against true background
 outside the object's mask, every masked training view), the spread of the object's surface points
 (distance from their median point, before the visual hull's filter), and for each light X,Y,Z given
 (e.g. the scene's true point light) its score, shading and masks' IoU. Writes RUN_shadow.png beside
-RUN: five masked training views, the found shadow in red, the true effect masks in blue.
+RUN: five masked training views, the found shadow in red, the true effect masks in blue. MASK_EDGE_PX:
+the pixels beyond the masks the search leaves out (``mi_voldis.fit.shadow.MASK_EDGE_PX``; before
+f6aeb3f it was the hull's dilation, 6 pixels at 160 x 120, 19 on the statue).
 """
 import json
 import os
@@ -33,6 +35,7 @@ def overlap(est, gt):
 
 
 def main(run, *lights):
+    S.MASK_EDGE_PX = int(os.environ.get("MASK_EDGE_PX", S.MASK_EDGE_PX))  # the search's band beyond the masks
     cfg = refit_config(run, "guided")
     with open(os.path.join(run, "config.json")) as f:
         rec = json.load(f)["dataset"]

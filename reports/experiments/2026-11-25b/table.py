@@ -24,7 +24,7 @@ def main(pairs):
           "matte IoU, off / on | residue, off / on | refit seconds, off / on |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for pair in pairs:
-        name, dirs = pair.split("=")
+        name, dirs = pair.split("=", 1)
         off, on = (load(d) for d in dirs.split(","))
         a, b = off["methods"]["volume"], on["methods"]["volume"]
         rec = (on.get("prior") or {}).get("shadow")
