@@ -115,37 +115,74 @@ def test_the_optimisation_loop_follows_an_end_that_moves(steps):
     assert p.seen == list(range(max(steps, 4))) and [r["step"] for r in log] == list(range(1, max(steps, 4) + 1))
 
 
-def test_rescale_keeps_min_steps_in_the_same_proportions_when_the_budget_is_spent():
-    schedule, steps = [[0, 64], [200, 128], [400, 256]], 1000
-    assert rescale(schedule, steps, 200, 0.01, 64, 1e9, 800)[1] > 1000  # the budget allows more: it rules
-    spent, total = rescale(schedule, steps, 200, 0.01, 64, 0.0, 1800)  # 800 ahead -> 1600: each stage x 2
-    assert spent == [[0, 64], [200, 128], [600, 256]] and total == 1800
-    again = rescale(spent, total, 300, 0.01, 128, -5.0, 1800)  # still over budget: the plan does not drift
-    assert again == (spent, total)
-    inner, total = rescale(schedule, steps, 300, 0.01, 128, 0.0, 2100)  # 100 + 600 ahead -> 1800 (x 18 / 7)
-    assert inner[:2] == schedule[:2] and inner[2][0] == 300 + round(100 * 18 / 7) and total == 2100
-    short = rescale([[0, 64], [3, 128], [6, 256]], 9, 0, 0.01, 64, 0.0, 10)  # 3 x 3.33 rounds to 3 x 3
-    assert short == ([[0, 64], [3, 128], [6, 256]], 10)  # the step short goes to the last stage
+def calibrated(seconds, samples, steps=200):
+    """A fit state just past its calibration steps, each taking ``seconds`` and evaluating ``samples``."""
+    from types import SimpleNamespace
+    log = [{"step": s, "step_seconds": seconds, "time": seconds * s, "samples": samples} for s in range(1, steps + 1)]
+    return SimpleNamespace(log=log, plan=None, steps_full=None, schedule=None)
 
 
-@pytest.mark.parametrize("minutes, floor", [("auto", 5000), (0.05, None)])
-def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked(minutes, floor):
+def planned(cfg, state):
     from types import SimpleNamespace
 
     from mi_voldis.fit.train import plan_schedule
-    cfg = FitConfig().replace(minutes=minutes, resolution=256, min_steps=5000)
     ds = SimpleNamespace(train=list(range(4)), size=(100, 100))  # 0.04 Mpx: the 1.5-minute floor
-    state = SimpleNamespace(log=[{"step": s, "step_seconds": 0.01, "time": 0.01 * s} for s in range(1, 201)],
-                            plan=None, steps_full=None, schedule=None)
-    plan_schedule(SimpleNamespace(cfg=cfg, ds=ds), state, None)
+    plan_schedule(SimpleNamespace(cfg=cfg, ds=ds, bank=SimpleNamespace(pixels=4 * 100 * 100)), state, None)
+    return state
+
+
+PLANS = {}  # load -> (schedule, steps) of the parametrised test below
+
+
+@pytest.mark.parametrize("load", [1.0, 3.0, 0.2])
+def test_the_default_plan_is_costed_at_the_reference_speed_whatever_the_machine(load):
+    """minutes 'auto': a coarse step costs its samples over reference_msps, however long it took here;
+    the budget decides the steps, min_steps their floor, and nothing is re-timed while the fit runs."""
+    cfg = FitConfig().replace(resolution=256, min_steps=500)
+    samples = 0.01 * cfg.reference_msps * 1e6  # 0.01 s a coarse step at the reference speed
+    state = planned(cfg, calibrated(0.01 * load, samples))
+    budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
+    assert state.plan["coarse_step_seconds"] == pytest.approx(0.01)
+    assert state.steps_full == max(steps_for(stages(cfg, 64, 256), 0.01, budget), 500)
+    PLANS[load] = (state.schedule, state.steps_full)
+    assert PLANS[load] == PLANS.get(1.0, PLANS[load])  # a faster or slower machine plans the same fit
+    from mi_voldis.fit.train import replan
+    before = (list(state.schedule), state.steps_full)
+    state.log += [{"step": s, "step_seconds": 1.0, "time": 1000.0, "samples": samples}
+                  for s in range(len(state.log) + 1, state.schedule[-1][0] + 101)]
+    for step in (300, state.schedule[-1][0], state.schedule[-1][0] + 100):
+        replan(state, step)
+    assert (state.schedule, state.steps_full) == before and "rescaled" not in state.plan
+
+
+def test_the_default_resolution_is_the_finest_the_reference_speed_affords(monkeypatch):
+    import mi_voldis.fit.train as train
+    monkeypatch.setattr(train, "capture_resolution", lambda *a: 1024)  # the capture asks for more than it buys
+    cfg = FitConfig().replace(min_steps=0, min_epochs=400)
+    samples = 0.01 * cfg.reference_msps * 1e6
+    for load in (1.0, 4.0):
+        state = planned(cfg, calibrated(0.01 * load, samples))
+        budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
+        assert state.plan["final_resolution"] == affordable_resolution(cfg, 64, 0.01, budget, 4 * 100 * 100) < 1024
+
+
+def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked():
+    cfg = FitConfig().replace(resolution=256, min_steps=5000)
+    state = planned(cfg, calibrated(0.5, 0.01 * cfg.reference_msps * 1e6))  # a slow machine changes nothing
     budgeted = steps_for(stages(cfg, 64, 256), 0.01, state.plan["budget_seconds"] - 2.0)
-    assert state.plan.get("min_steps") == floor and state.schedule[-1][1] == 256
-    assert state.steps_full == (max(budgeted, 5000) if floor else max(budgeted, 400))
-    if floor:  # rescalings that find the budget spent keep the floor and the stages' shares
-        from mi_voldis.fit.train import replan
-        planned = [start for start, _ in state.schedule]
-        for step in (300, 400, planned[2], planned[2] + 100):
-            state.log += [{"step": s, "step_seconds": 1.0, "time": 1000.0} for s in range(len(state.log) + 1, step + 1)]
-            replan(state, step)
-            assert state.steps_full == 5000 and state.plan["rescaled"][-1] == [step, 5000]
-            assert [start for start, _ in state.schedule] == planned
+    assert budgeted < 5000 and state.plan["min_steps"] == 5000 and state.schedule[-1][1] == 256
+    assert state.steps_full == 5000
+
+
+def test_a_budget_in_minutes_is_timed_here_and_rescaled_as_the_fit_runs():
+    cfg = FitConfig().replace(minutes=0.5, resolution=64)  # one stage: a replan times the stage running
+    slow, fast = (planned(cfg, calibrated(s, 1e5)) for s in (0.02, 0.01))
+    assert "min_steps" not in slow.plan and slow.plan["coarse_step_seconds"] == 0.02
+    assert fast.steps_full > slow.steps_full > 500  # the same budget buys a faster machine more steps
+    from mi_voldis.fit.train import replan
+    fast.log += [{"step": s, "step_seconds": 0.04, "time": 2.0 + 0.04 * (s - 200), "samples": 1e5}
+                 for s in range(201, 501)]
+    before = fast.steps_full
+    replan(fast, 500)  # it now runs at a quarter of the planned speed: fewer steps ahead
+    assert fast.plan["rescaled"] == [[500, fast.steps_full]]
+    assert fast.steps_full == 500 + round((cfg.minutes * 60 * 0.8 - fast.log[-1]["time"]) / 0.04) < before

@@ -6,7 +6,8 @@ RUN: a finished fit kept with ``--keep-checkpoints``; its final state's full fie
 background is fitted again with ``bg_strategy=STRATEGY`` (the background phase's other settings,
 :data:`BACKGROUND_SETTINGS`, as today's defaults, whatever RUN recorded; every other one as RUN's
 config.json), and
-OUT receives ``metrics.json`` and the background of each held-out view as PNG. Scored on the held-out
+OUT receives ``metrics.json``, the background of each held-out view as PNG and, where the foreground is
+scored, its coverage against the truth (``viewNNN_coverage.png``: :func:`coverage_errors`). Scored on the held-out
 views against the ground-truth background (in-mask = masks dilated by ``hull_dilation``): PSNR inside
 the masks (and there, apart, where some training view sees the background unmasked and where none
 does: :mod:`mi_voldis.bench.visible`) and outside them (beside the full field's outside them), the
@@ -96,6 +97,16 @@ def evaluate(ds, integrator, dilation_fraction, hull_min_views=0.9):
     return rows, renders
 
 
+def coverage_errors(photo, found, truth):
+    """A picture of the foreground coverage against the truth (uint8 RGB): the photo dimmed, pixels of
+    both white, the foreground's alone (false positives) red, the truth's alone (missed) blue."""
+    out = 0.3 * np.clip(photo[..., :3], 0, 1)
+    out[found & truth] = 1.0
+    out[found & ~truth] = (1.0, 0.1, 0.1)
+    out[~found & truth] = (0.2, 0.4, 1.0)
+    return (out * 255).round().astype(np.uint8)
+
+
 def main(argv=None):
     argv = list(argv or sys.argv[1:])
     sets = [argv[k + 1] for k, a in enumerate(argv) if a == "--set" and k + 1 < len(argv)]
@@ -142,6 +153,10 @@ def main(argv=None):
         renders = {v: render_camera(integrator, ds.cameras[v], ("bg",)) for v in list(ds.test)[:PREVIEWS]}
     for v, layers in renders.items():
         write_png(os.path.join(out, f"view{v:03d}_bg.png"), display_to_uint8(np.clip(layers["bg"][0], 0, 1)))
+        if "fg_coverage" in layers:
+            truth = ds.coverage[v] > 0.5 if ds.coverage is not None else ds.masks[v]
+            write_png(os.path.join(out, f"view{v:03d}_coverage.png"),
+                      coverage_errors(ds.images[v], layers["fg_coverage"] > 0.5, truth))
     write_json(os.path.join(out, "metrics.json"), {"strategy": strategy, "seconds": seconds, "methods": rows,
                                                    "prior": state.prior, "peak_rss_mib": peak_rss_mib()})
 

@@ -56,10 +56,14 @@ class FitConfig(Settings):
                                          "[-(1 + b), 1 + b]^3 (1: Mip-NeRF 360)", above=0)
 
     # ---- schedule: coarse to fine, as data (mi_voldis/fit/schedule.py derives what is left null / 'auto')
-    minutes: float | str | None = setting("auto", "time budget of the fit on this machine: the number of steps is "
-                                                  "chosen to fill it ('auto': 2.5 min per million training pixels, "
-                                                  "1.5 to 10, and min_steps at least; null: steps_full)",
+    minutes: float | str | None = setting("auto", "time budget of the fit: the number of steps is chosen to fill "
+                                                  "it ('auto': 2.5 min per million training pixels, 1.5 to 10, "
+                                                  "costed at reference_msps, and min_steps at least; a number: "
+                                                  "minutes of this machine's wall clock; null: steps_full)",
                                         check=_minutes_error)
+    reference_msps: float = setting(18.0, "with minutes 'auto', the coarse stage's speed the plan assumes, in "
+                                          "M samples/s (the project's 2-core machine): the plan depends on the "
+                                          "capture alone, not on how fast or busy this machine is", above=0)
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
     min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
                                    "overrunning the budget where it allows fewer (the resolution is chosen "

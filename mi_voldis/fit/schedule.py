@@ -14,14 +14,18 @@ derived from the capture and the time budget once the first, coarse stage has ru
   took in the coarse stage scaled to each stage's resolution as (R_k / R_1)^COST_EXPONENT (measured: a
   step costs its samples, proportional to R, and its vertices, to R^2 on surfaces), leaving
   ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation;
-* at the start of every later stage and every ``REPLAN_EVERY`` steps the steps still to come are
-  rescaled to the budget that is left (:func:`rescale`), with the seconds a step took in the stage just
-  finished or running: the cost model only has to be right one stage ahead, and within the last stage
-  not at all, so the fit ends on time on any machine and scene;
-* with the default budget (``minutes`` 'auto') the fit runs at least ``min_steps`` steps (at planning
-  and in every rescaling), overrunning the budget where it allows fewer (a small capture, a slow
-  machine); the final resolution is chosen from the budget alone, so the extra time buys steps on the
-  grid the budget picked (a grid seen too few times stays hazy), not a finer one.
+* the default budget (``minutes`` 'auto', :func:`auto_minutes`) is costed at a reference speed, not
+  timed: a coarse step takes its evaluated samples (counted in the calibration steps, which depend on
+  the capture alone) over ``reference_msps``, the coarse stage's speed on the project's 2-core
+  machine. A capture so gets the same grid and steps on every machine, loaded or idle, fast or slow,
+  and a resumed fit ends where an uninterrupted one would; the fit then runs at least ``min_steps``
+  steps (a small capture's budget buys fewer: the extra steps go to the grid the budget picked, as a
+  grid seen too few times stays hazy, not to a finer one);
+* a budget given in minutes is this machine's wall clock: the seconds per step are timed, and at the
+  start of every later stage and every ``REPLAN_EVERY`` steps the steps still to come are rescaled to
+  the budget that is left (:func:`rescale`), with the seconds a step took in the stage just finished or
+  running: the cost model only has to be right one stage ahead, and within the last stage not at all,
+  so the fit ends on time on any machine and scene.
 """
 import drjit as dr
 import mitsuba as mi
@@ -128,24 +132,22 @@ def schedule_of(plan_stages, steps, first):
 REPLAN_EVERY = 100  # steps between rescalings within a stage (and at every stage start)
 
 
-def rescale(schedule, steps_full, step, seconds_per_step, measured_resolution, budget_left, min_steps=0):
+def rescale(schedule, steps_full, step, seconds_per_step, measured_resolution, budget_left):
     """(schedule, steps_full) with the steps from ``step`` on stretched or shrunk in proportion so that
     their cost fills ``budget_left`` seconds, a step at ``measured_resolution`` having cost
     ``seconds_per_step`` and a step at resolution R that times (R / measured)^COST_EXPONENT. What is
     ahead is the rest of the stage holding ``step`` and the stages after it; each keeps at least one
-    step; the steps before ``step`` are unchanged. The fit runs at least ``min_steps`` steps in all:
-    where the budget allows fewer, the stages ahead stretch to them in the same proportions (one
-    factor for all, so a rescaling that finds the budget spent keeps the stages' shares)."""
+    step; the steps before ``step`` are unchanged."""
     k = max(i for i, (start, _) in enumerate(schedule) if start <= step)
     starts = [step] + [start for start, _ in schedule[k + 1:]]
     levels = np.array([r for _, r in schedule[k:]], np.float64)
     lengths = np.diff(starts + [steps_full]).astype(np.float64)
     cost = seconds_per_step * (levels / measured_resolution) ** COST_EXPONENT
-    factor = max(max(budget_left, 0.0) / float(np.dot(lengths, cost)), (min_steps - step) / float(lengths.sum()))
+    factor = max(budget_left, 0.0) / float(np.dot(lengths, cost))
     lengths = np.maximum(1, np.round(lengths * factor)).astype(int)
     new_starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
     ahead = [[int(s), r] for s, (_, r) in zip(new_starts[1:], schedule[k + 1:])]
-    return schedule[:k + 1] + ahead, max(int(step + lengths.sum()), min_steps)  # rounding short: the last stage
+    return schedule[:k + 1] + ahead, int(step + lengths.sum())
 
 
 def resolution_at(schedule, step):

@@ -232,11 +232,12 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
 
 
 def replan(state, step):
-    """With a time budget, rescale the steps from ``step`` to the budget left (:func:`rescale`), timed on
-    the stage just finished (at a stage start) or on the one running, and never below the plan's
-    ``min_steps``; explicit step counts stay."""
-    budget = (state.plan or {}).get("budget_seconds")
-    if budget is None or step >= state.steps_full:
+    """With a wall-clock budget (``minutes`` given), rescale the steps from ``step`` to the budget left
+    (:func:`rescale`), timed on the stage just finished (at a stage start) or on the one running;
+    explicit step counts and the default plan (costed at the reference speed) stay."""
+    plan = state.plan or {}
+    budget = plan.get("budget_seconds")
+    if budget is None or "reference_msps" in plan or step >= state.steps_full:
         return
     k = max(i for i, (start, _) in enumerate(state.schedule) if start <= step)
     timed = k - 1 if state.schedule[k][0] == step else k  # the stage whose steps are timed
@@ -249,8 +250,7 @@ def replan(state, step):
     if len(rows) < 10:
         return
     state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, float(np.median(rows)),
-                                               state.schedule[timed][1], budget - state.log[-1]["time"],
-                                               state.plan.get("min_steps", 0))
+                                               state.schedule[timed][1], budget - state.log[-1]["time"])
     state.plan.setdefault("rescaled", []).append([step, state.steps_full])
 
 
@@ -263,15 +263,18 @@ def plan_schedule(inputs, state, integrator):
     state.plan = {"capture_resolution": int(final)}
     if cfg.steps_full is None:
         first = cfg.calibration_steps // 5  # past the first steps (kernels compiling)
-        rows = [r["step_seconds"] for r in state.log if r["step"] > first and "test_psnr" not in r]
-        seconds = float(np.median(rows))
+        rows = [r for r in state.log if r["step"] > first and "test_psnr" not in r]
         minutes = auto_minutes(inputs.ds) if cfg.minutes == "auto" else cfg.minutes
-        spent = state.log[-1]["time"] if state.log else 0.0
+        if cfg.minutes == "auto":  # costed at the reference speed: the same plan on every machine, loaded or not
+            seconds = float(np.median([r["samples"] for r in rows])) / (cfg.reference_msps * 1e6)
+            spent = cfg.calibration_steps * seconds
+            state.plan.update(min_steps=cfg.min_steps, reference_msps=cfg.reference_msps)
+        else:  # this machine's wall clock, re-timed as the fit runs (:func:`replan`)
+            seconds = float(np.median([r["step_seconds"] for r in rows]))
+            spent = state.log[-1]["time"] if state.log else 0.0
         budget = minutes * 60.0 * (1.0 - RESERVED) - spent
         state.plan.update(minutes=float(minutes), coarse_step_seconds=seconds,
                           budget_seconds=minutes * 60.0 * (1.0 - RESERVED))
-        if cfg.minutes == "auto":
-            state.plan["min_steps"] = cfg.min_steps
         if cfg.resolution == "auto":
             state.plan["affordable_resolution"] = int(affordable_resolution(cfg, coarse, seconds, budget,
                                                                             inputs.bank.pixels))
