@@ -155,7 +155,14 @@ def finished(out, dataset, sets, ignore=()):
 
 
 def folder_bytes(path):
-    return sum(os.path.getsize(os.path.join(d, f)) for d, _, files in os.walk(path) for f in files)
+    """Bytes of the run folder as the default command leaves it: without ``checkpoints/`` (kept only
+    with ``--keep-checkpoints``) and without task folders written into it later (those hold their own
+    ``scene.xml``)."""
+    total = 0
+    for d, dirs, files in os.walk(path):
+        dirs[:] = [s for s in dirs if s != "checkpoints" and not os.path.isfile(os.path.join(d, s, "scene.xml"))]
+        total += sum(os.path.getsize(os.path.join(d, f)) for f in files)
+    return total
 
 
 def time_to_within(curve, best, tolerance=0.5):
