@@ -186,3 +186,16 @@ def test_a_budget_in_minutes_is_timed_here_and_rescaled_as_the_fit_runs():
     replan(fast, 500)  # it now runs at a quarter of the planned speed: fewer steps ahead
     assert fast.plan["rescaled"] == [[500, fast.steps_full]]
     assert fast.steps_full == 500 + round((cfg.minutes * 60 * 0.8 - fast.log[-1]["time"]) / 0.04) < before
+
+
+def test_the_plan_is_reported_in_one_line():
+    from types import SimpleNamespace
+
+    from mi_voldis.fit.train import describe_plan
+    state = SimpleNamespace(schedule=[[0, 64], [600, 144], [1050, 288]], steps_full=4952,
+                            plan={"capture_resolution": 800, "affordable_resolution": 288, "minutes": 8.1,
+                                  "reference_msps": 18.0})
+    assert describe_plan(state) == ("resolution 64 (step 0) -> 144 (step 600) -> 288 (step 1050), 4952 steps "
+                                    "(8.1 min at the reference speed); the capture asks 800, the budget affords 288")
+    state.plan = {"capture_resolution": 96, "affordable_resolution": 128, "minutes": 2.0}  # timed, capture-bound
+    assert describe_plan(state).endswith("(2.0 min of this machine's wall clock); the capture asks 96")

@@ -215,6 +215,8 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
         problem.sync_states()
         plan_schedule(inputs, state, problem.integrator)
         state.save(inputs.checkpoint, "full", cfg.calibration_steps)
+        if inputs.progress:
+            print(f"plan: {describe_plan(state)}", file=sys.stderr)
     start = state.step
     sh_step = state.schedule[1][0] if len(state.schedule) > 1 else state.steps_full // 3
     if cfg.sh_degree == "auto" and start < sh_step:
@@ -288,6 +290,20 @@ def plan_schedule(inputs, state, integrator):
                     state.plan.get("min_steps", 0))
     state.steps_full = steps
     state.schedule = schedule_of(plan_stages, steps, cfg.calibration_steps)
+
+
+def describe_plan(state):
+    """One line of the frozen plan: stages (resolution: voxels along the longest side), steps and what
+    bounded the final resolution."""
+    plan = state.plan
+    line = "resolution " + " -> ".join(f"{r} (step {k})" for k, r in state.schedule) + f", {state.steps_full} steps"
+    if "minutes" in plan:
+        clock = "at the reference speed" if "reference_msps" in plan else "of this machine's wall clock"
+        line += f" ({plan['minutes']:.1f} min {clock})"
+    line += f"; the capture asks {plan['capture_resolution']}"
+    if plan.get("affordable_resolution", plan["capture_resolution"]) < plan["capture_resolution"]:
+        line += f", the budget affords {plan['affordable_resolution']}"
+    return line
 
 
 def held_out_psnr(inputs, problem):
