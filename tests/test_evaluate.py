@@ -57,3 +57,9 @@ def test_evaluate_script(tiny_run, tiny_dataset, tmp_path, capsys):
     small_transforms(plain)
     assert _boundary.run(main, [tiny_run, plain]) == 1
     assert "no test view has a ground-truth background" in capsys.readouterr().err
+
+
+def test_held_out_means_skip_views_where_a_metric_is_undefined():
+    from mi_voldis.fit.report import mean_defined
+    assert mean_defined([0.5, float("nan"), 0.7]) == pytest.approx(0.6)
+    assert mean_defined([float("nan"), float("nan")]) is None

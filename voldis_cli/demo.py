@@ -32,7 +32,7 @@ def main(argv=None):
         sys.exit(f"error: {e}")
     fit = summary["fit"]
     print(json.dumps({"seconds": {k: round(v, 1) for k, v in summary["seconds"].items()},
-                      "held_out": {k: round(v, 3) for k, v in fit.items()}}, indent=1))
+                      "held_out": {k: None if v is None else round(v, 3) for k, v in fit.items()}}, indent=1))
     print(f"dataset:        {summary['dataset']}")
     print(f"fitted run:     {summary['run']}  (scene.xml, *_grid.npz, metrics.json, previews/, training.png)")
     for task in summary["tasks"]:

@@ -166,8 +166,8 @@ def _accuracy(results, report_dir):
     for name, f in fits.items():
         h = f["metrics"]["held_out"]
         if "bg_psnr" in h:
-            md.append(f"| {name} | {h['bg_psnr']:.2f} | {h['bg_psnr_mask']:.2f} | {h['bg_ssim_mask']:.3f} | "
-                      f"{h['fg_coverage_iou']:.3f} | {_f(h.get('fg_matte_iou'), 3)} | "
+            md.append(f"| {name} | {h['bg_psnr']:.2f} | {_f(h['bg_psnr_mask'], 2)} | {_f(h['bg_ssim_mask'], 3)} | "
+                      f"{_f(h.get('fg_coverage_iou'), 3)} | {_f(h.get('fg_matte_iou'), 3)} | "
                       f"{_f(f['metrics']['seconds'].get('phase_bg'), 0)} |")
     return md + [""]
 

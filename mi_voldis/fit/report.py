@@ -36,8 +36,15 @@ def evaluate(ds, integrator, hull_dilation):
             row["fg_coverage_iou"] = iou(out["fg_coverage"] > 0.5, truth)
             row["fg_matte_iou"] = iou(composite_channels(layer_channels(out))["fg.A"] > 0.5, truth)
         rows.append(row)
-    summary = {key: float(np.nanmean([r[key] for r in rows])) for key in rows[0] if key != "view"} if rows else {}
+    summary = {key: mean_defined([r[key] for r in rows]) for key in rows[0] if key != "view"} if rows else {}
     return summary, rows, renders
+
+
+def mean_defined(values):
+    """Mean over the views where a metric is defined (not NaN, e.g. an IoU where neither mask has a
+    pixel); None where it is defined on none."""
+    values = [v for v in values if v == v]
+    return float(np.mean(values)) if values else None
 
 
 def write_previews(out, renders, views):
