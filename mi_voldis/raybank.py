@@ -24,6 +24,10 @@ class RayBank:
         masks = dataset.masks[self.views] if dataset.masks is not None else np.zeros((n, h, w), bool)
         self.masks_np = masks
         self.masks = mi.Float(masks.reshape(-1).astype(np.float32))
+        # nerfstudio's pixels to ignore: batches without a pool of their own draw from the others
+        ignore = dataset.ignore[self.views] if dataset.ignore is not None else None
+        self.ignore_np = ignore
+        self.keep = None if ignore is None else np.flatnonzero(~ignore.reshape(-1)).astype(np.uint32)
         self.table = CameraTable([dataset.cameras[v] for v in self.views])
         self.cams = self.table.cameras
 
@@ -33,8 +37,10 @@ class RayBank:
 
     def batch(self, rng, n, pool=None, tile=1):
         """Rays, colours, masks and views (indices into this bank's views) of ``n`` random pixels (of
-        ``pool``, flat indices, when given), each at a random position inside its pixel; ``tile`` > 1: in
-        tiles of tile x tile pixels, each around a random pixel (of ``pool``)."""
+        ``pool``, flat indices, when given, else of the pixels the dataset does not mark to ignore), each
+        at a random position inside its pixel; ``tile`` > 1: in tiles of tile x tile pixels, each around a
+        random pixel (of ``pool``)."""
+        pool = self.keep if pool is None else pool
         count = -(-n // (tile * tile))
         anchors = rng.integers(0, self.pixels, count) if pool is None else pool[rng.integers(0, len(pool), count)]
         idx = tile_pixels(rng, anchors, tile, self.height, self.width)[:n] if tile > 1 else anchors

@@ -263,7 +263,7 @@ def test_llff_errors(tmp_path, breakage, message):
     ("mask_size", "mask is 12x9 but the images are 24x18", "img_02"),
     ("empty_masks", "every object mask is empty", "masks"),
     ("full_mask", "mask covers every pixel", "img_00"),
-    ("ambiguous_key", "'mask_path'", "transforms.json"),
+    ("missing_ignore_mask", "mask_path 'masks/x.png' not found", "transforms.json"),
     ("ambiguous_focal", "intrinsics are ambiguous", "transforms.json"),
     ("bad_camera_model", "camera_model FOV cannot be undistorted", "transforms.json"),
     ("missing_image", "not found", "transforms.json"),
@@ -284,7 +284,7 @@ def test_transforms_errors(tmp_path, breakage, message, culprit):
             iio.imwrite(masks / n, np.zeros((18, 24), np.uint8))
     elif breakage == "full_mask":
         iio.imwrite(masks / names[0], np.full((18, 24), 255, np.uint8))
-    elif breakage == "ambiguous_key":
+    elif breakage == "missing_ignore_mask":
         meta["frames"][1]["mask_path"] = "masks/x.png"
     elif breakage == "ambiguous_focal":
         meta["camera_angle_x"] = 1.0

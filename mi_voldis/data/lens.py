@@ -1,22 +1,29 @@
 """Lens models of captures (COLMAP, nerfstudio) and their removal: every view becomes a pinhole.
 
-A :class:`Lens` holds OpenCV-style intrinsics (pixels: fx, fy, cx, cy) and distortion coefficients in
-OpenCV's order. The fields render through Mitsuba's pinhole camera (square pixels), so a distorted
-capture is resampled once, when it is loaded: output pixel (u, v) of the pinhole camera
-K' = [[f, 0, cx], [0, f, cy]] (f = fx: the same centre and scale) looks along the normalised ray
-((u - cx) / f, (v - cy) / f, 1), which the lens maps to the source pixel
+A :class:`Lens` holds OpenCV-style intrinsics (pixels: fx, fy, cx, cy; pixel (i, j) spans [i, i + 1] x
+[j, j + 1], as COLMAP, nerfstudio and the Mitsuba camera count) and distortion coefficients. The fields
+render through Mitsuba's pinhole camera (square pixels), so a distorted capture, or one with fx != fy,
+is resampled once, when it is loaded: the centre (u, v) of a pixel of the pinhole camera
+K' = [[f, 0, cx], [0, f, cy]] (f = fx: the same centre and horizontal scale) looks along the
+normalised ray (x, y, 1) = ((u - cx) / f, (v - cy) / f, 1), which the lens maps to the source point
+(fx x_d + cx, fy y_d + cy) with
 
-    perspective (OpenCV):  r^2 = x^2 + y^2,  x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4
-                           + k6 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2),  y_d likewise,  u_s = fx x_d + cx;
-    fisheye (OpenCV):      theta = atan(r),  theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6
-                           + k4 theta^8),  x_d = x theta_d / r.
+    perspective:  r^2 = x^2 + y^2,
+                  d = (1 + k1 r^2 + k2 r^4 + k3 r^6 + k8 r^8) / (1 + k4 r^2 + k5 r^4 + k6 r^6),
+                  x_d = x d + 2 p1 x y + p2 (r^2 + 2 x^2),  y_d = y d + 2 p2 x y + p1 (r^2 + 2 y^2);
+    fisheye:      theta = atan(r),  theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6
+                  + k4 theta^8),  x_d = x theta_d / r,  y_d = y theta_d / r.
 
-OpenCV evaluates these maps (``initUndistortRectifyMap``); images are resampled bilinearly, masks
-with nearest neighbours. Pixels whose source falls outside the photo repeat its border.
+The perspective map is OpenCV's rational model (COLMAP's FULL_OPENCV: k4..k6 divide) with one more
+numerator term: nerfstudio's ``k4`` under OPENCV is that r^8 coefficient ``k8`` (its
+``radial_and_tangential_undistort``: 1 + k1 r + k2 r^2 + k3 r^3 + k4 r^4 in its r = x^2 + y^2), not
+OpenCV's k4. The fisheye map is OpenCV's (and nerfstudio's OPENCV_FISHEYE). Images are resampled
+bilinearly, masks with nearest neighbours (``cv2.remap``); pixels whose source falls outside the photo
+repeat its border.
 
 Models by name (COLMAP's and nerfstudio's ``camera_model``): SIMPLE_PINHOLE, PINHOLE (no distortion);
 SIMPLE_RADIAL, RADIAL, OPENCV, FULL_OPENCV (perspective); OPENCV_FISHEYE, SIMPLE_RADIAL_FISHEYE,
-RADIAL_FISHEYE (fisheye). FOV and the thin-prism models have no OpenCV equivalent and are refused.
+RADIAL_FISHEYE (fisheye). FOV and the thin-prism models are refused.
 """
 from dataclasses import dataclass
 
@@ -34,8 +41,9 @@ class LensError(ValueError):
 
 @dataclass(frozen=True)
 class Lens:
-    """Intrinsics in pixels and OpenCV distortion: ``coeffs`` (k1, k2, p1, p2, k3, k4, k5, k6) for
-    perspective lenses, (k1, k2, k3, k4) for fisheye lenses."""
+    """Intrinsics in pixels and distortion: ``coeffs`` (k1, k2, p1, p2, k3, k4, k5, k6[, k8]) for
+    perspective lenses (OpenCV's order, then the r^8 numerator term), (k1, k2, k3, k4) for fisheye
+    lenses."""
     model: str
     fx: float
     fy: float
@@ -55,20 +63,34 @@ class Lens:
         """The same lens for images resized by ``s`` (pixel coordinates of pixel edges, as COLMAP)."""
         return Lens(self.model, self.fx * s, self.fy * s, self.cx * s, self.cy * s, self.coeffs)
 
+    def distort(self, x, y):
+        """Normalised image coordinates (x_d, y_d) the lens maps the ray (x, y, 1) to (module docstring)."""
+        x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
+        r2 = x * x + y * y
+        if self.fisheye:
+            k1, k2, k3, k4 = (tuple(self.coeffs) + (0.0,) * 4)[:4]
+            r = np.sqrt(r2)
+            theta = np.arctan(r)
+            t2 = theta * theta
+            theta_d = theta * (1 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4))))
+            s = np.where(r > 1e-12, theta_d / np.maximum(r, 1e-12), 1.0)  # theta_d / r -> 1 on the axis
+            return x * s, y * s
+        k1, k2, p1, p2, k3, k4, k5, k6, k8 = (tuple(self.coeffs) + (0.0,) * 9)[:9]
+        d = (1 + r2 * (k1 + r2 * (k2 + r2 * (k3 + r2 * k8)))) / (1 + r2 * (k4 + r2 * (k5 + r2 * k6)))
+        return (x * d + 2 * p1 * x * y + p2 * (r2 + 2 * x * x),
+                y * d + 2 * p2 * x * y + p1 * (r2 + 2 * y * y))
+
     def undistorter(self, width, height):
         """``(fx, cx, cy), resample``: the pinhole camera of the resampled views and a function
         ``resample(image, nearest=False)`` for (H, W[, C]) arrays of this lens's views."""
         f = float(self.fx)
-        if not self.distorted:
+        if not self.distorted and self.fy == self.fx:
             return (f, self.cx, self.cy), _identity
-        k = np.array([[self.fx, 0, self.cx], [0, self.fy, self.cy], [0, 0, 1]], np.float64)
-        new = np.array([[f, 0, self.cx], [0, f, self.cy], [0, 0, 1]], np.float64)
-        if self.fisheye:
-            d = np.asarray((tuple(self.coeffs) + (0.0,) * 4)[:4], np.float64)
-            mx, my = cv2.fisheye.initUndistortRectifyMap(k, d, np.eye(3), new, (width, height), cv2.CV_32FC1)
-        else:
-            d = np.asarray((tuple(self.coeffs) + (0.0,) * 8)[:8], np.float64)
-            mx, my = cv2.initUndistortRectifyMap(k, d, np.eye(3), new, (width, height), cv2.CV_32FC1)
+        u, v = np.meshgrid(np.arange(width) + 0.5, np.arange(height) + 0.5)
+        xd, yd = self.distort((u - self.cx) / f, (v - self.cy) / f)
+        # cv2.remap indexes pixel centres at integers: subtract the half pixel
+        mx = (self.fx * xd + self.cx - 0.5).astype(np.float32)
+        my = (self.fy * yd + self.cy - 0.5).astype(np.float32)
 
         def resample(image, nearest=False):
             img = np.asarray(image)
@@ -83,8 +105,9 @@ def _identity(image, nearest=False):
     return image
 
 
-def lens_from_opencv_keys(model, d):
-    """Lens of nerfstudio's keys: ``camera_model``, fl_x, fl_y, cx, cy, k1..k4, p1, p2 in dict ``d``."""
+def lens_from_opencv_keys(model, d, nerfstudio=False):
+    """Lens of the keys ``camera_model``, fl_x, fl_y, cx, cy, k1..k6, p1, p2 in dict ``d``; with
+    ``nerfstudio``, a perspective ``k4`` is nerfstudio's r^8 term (module docstring), else OpenCV's."""
     model = (model or "OPENCV").upper()
     if model in UNSUPPORTED:
         raise LensError(f"camera_model {model} cannot be undistorted to a pinhole camera")
@@ -96,7 +119,8 @@ def lens_from_opencv_keys(model, d):
     if model in FISHEYE:
         coeffs = (get("k1"), get("k2"), get("k3"), get("k4"))
     else:
-        coeffs = (get("k1"), get("k2"), get("p1"), get("p2"), get("k3"), get("k4"), get("k5"), get("k6"))
+        coeffs = (get("k1"), get("k2"), get("p1"), get("p2"), get("k3"), 0.0 if nerfstudio else get("k4"),
+                  get("k5"), get("k6"), get("k4") if nerfstudio else 0.0)
     return Lens(model, fx, fy, get("cx"), get("cy"), coeffs)
 
 

@@ -2,17 +2,22 @@
 
 Top level: ``camera_angle_x`` (Blender) or ``fl_x`` [, ``fl_y``, ``cx``, ``cy``, ``w``, ``h``]
 (pixels, for images of ``w`` x ``h``), nerfstudio's ``camera_model`` (PINHOLE, OPENCV,
-OPENCV_FISHEYE: the views are undistorted once with ``k1``..``k4``, ``p1``, ``p2``;
-:mod:`mi_voldis.data.lens`); every one of these may instead be given per frame. Optional:
+OPENCV_FISHEYE: the views are undistorted once with ``k1``..``k4``, ``p1``, ``p2``, read as nerfstudio
+reads them, ``k4`` under OPENCV its r^8 term; views with ``fl_y`` != ``fl_x`` are resampled to square
+pixels; :mod:`mi_voldis.data.lens`); every one of these may instead be given per frame. Optional:
 ``aabb`` ([[x0, y0, z0], [x1, y1, z1]], the scene box), ``forward_facing`` (bool; otherwise detected
 from the camera layout), ``near`` / ``far`` (forward-facing depth bounds; estimated from the points,
 or NeRF's default near plane 1, when absent), ``ply_file_path`` (sparse points in the frames' world
 frame, as ns-process-data writes them: they give depth bounds and the box), ``applied_transform``
 (the 3x4 matrix nerfstudio applied to COLMAP's world; kept in ``meta``), ``background_color`` (RGB
 over which RGBA images are composited; default white, Blender's convention), ``moved_transform``
-(4x4 world-space matrix of the ``moved_path`` ground truth). Per frame: ``file_path`` (relative to
+(4x4 world-space matrix of the ``moved_path`` ground truth), ``applied_scale`` (kept in ``meta``),
+``train_filenames`` / ``test_filenames`` (``val_filenames`` when there is no test list; paths as the
+frames' ``file_path``: they give the split, as nerfstudio's dataparser reads them; frames in no list
+are left out). Per frame: ``file_path`` (relative to
 the JSON file, with or without extension), ``transform_matrix`` (camera-to-world, OpenGL axes),
-optional ``split`` ('train' / 'test'), ``object_mask_path`` (white = object), ``effect_mask_path``
+optional ``split`` ('train' / 'test'), ``mask_path`` (nerfstudio's pixels to ignore: black = left out
+of training, :attr:`~mi_voldis.data.types.Dataset.ignore`), ``object_mask_path`` (white = object), ``effect_mask_path``
 (white = the object's shadow or reflection outside its mask, else ``effects/`` by file stem; views
 without one have none), ``coverage_path``,
 ``background_path`` (the scene without the object) and ``moved_path``. Without
@@ -36,17 +41,15 @@ from .images import (
     read_coverage,
     read_effects,
     read_image,
+    read_mask,
     read_masks,
 )
+from .images import _reduce as reduce_mask
 from .lens import LensError, lens_from_opencv_keys
 from .points import read_ply
 from .scene_box import capture_box
 from .types import Dataset, DatasetError
 
-# Frame keys read elsewhere with another meaning: refusing them beats guessing.
-AMBIGUOUS_FRAME_KEYS = {
-    "mask_path": "nerfstudio's 'mask_path' marks pixels to ignore; object masks go in 'object_mask_path'",
-}
 INTRINSIC_KEYS = ("camera_model", "camera_angle_x", "fl_x", "fl_y", "cx", "cy", "w", "h",
                   "k1", "k2", "k3", "k4", "p1", "p2")
 SPLIT_FILES = (("transforms_train.json", "train"), ("transforms_test.json", "test"), ("transforms_val.json", "test"))
@@ -114,7 +117,7 @@ def _lens(d, path, width, height, factor):
     keys.setdefault("cx", 0.5 * w)
     keys.setdefault("cy", 0.5 * h)
     try:
-        lens = lens_from_opencv_keys(d.get("camera_model", "OPENCV"), keys)
+        lens = lens_from_opencv_keys(d.get("camera_model", "OPENCV"), keys, nerfstudio=True)
     except (LensError, TypeError, ValueError) as e:
         raise DatasetError(f"{path}: {e}") from None
     if not all(np.isfinite(v) and v > 0 for v in (lens.fx, lens.fy)):
@@ -140,14 +143,12 @@ def load_transforms(root, holdout=8, factor=None):
     frames = []
     for meta, path, split in metas:
         for k, frame in enumerate(meta["frames"]):
-            for key, why in AMBIGUOUS_FRAME_KEYS.items():
-                if key in frame:
-                    raise DatasetError(f"{path}: frame {k} has '{key}': {why}")
             for key in ("file_path", "transform_matrix"):
                 if key not in frame:
                     raise DatasetError(f"{path}: frame {k} has no '{key}'")
             frames.append((frame, path, split or frame.get("split")))
     base = {path: os.path.dirname(path) for _, path, _ in metas}
+    frames, listed = _split_lists(top, metas[0][1], frames, base)
     names, paths, images, cameras, splits = [], [], [], [], []
     for k, (frame, path, split) in enumerate(frames):
         p = _image_path(root, base[path], frame, path, factor)
@@ -182,12 +183,15 @@ def load_transforms(root, holdout=8, factor=None):
         splits.append(split)
     if any(s is None for s in splits):
         splits = ["test" if holdout and k % holdout == 0 else "train" for k in range(len(frames))]
+    if listed:
+        notes.append(listed)
     undistort = [r[1] for r in resamplers]
     masks, masked = _masks(root, frames, base, paths, (h, w), factor, undistort, notes)
+    ignore = _ignore(root, frames, base, (h, w), factor, undistort, notes)
     effects = _effects(root, frames, base, paths, (h, w), factor, undistort, masks)
     ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names, images=np.stack(images),
-                 cameras=cameras, split=np.array(splits), box=None, masks=masks, masked=masked,
-                 effects=effects, meta={"format": "transforms", "files": [p for p, _ in files], "notes": notes,
+                 cameras=cameras, split=np.array(splits), box=None, masks=masks, masked=masked, effects=effects,
+                 ignore=ignore, meta={"format": "transforms", "files": [p for p, _ in files], "notes": notes,
                        "color_space": "linear (encoded with the sRGB curve)" if is_linear(paths[0]) else "sRGB"})
     if has_alpha(paths[0]):  # RGBA composited over a known colour: what rays see beyond the scene
         ds.meta["background_color"] = background.tolist()
@@ -200,12 +204,74 @@ def load_transforms(root, holdout=8, factor=None):
         applied = np.eye(4)
         applied[:3, :4] = np.asarray(top["applied_transform"], np.float64)[:3, :4]
         ds.meta["applied_transform"] = applied.tolist()
+    if "applied_scale" in top:
+        ds.meta["applied_scale"] = float(top["applied_scale"])
     if "ply_file_path" in top:
         ds.points = read_ply(_resolve(base[metas[0][1]], top["ply_file_path"], "ply_file_path", metas[0][1]))
     ds.box, ds.near_far = _box(top, cameras, metas[0][1], ds.points, notes)
     if "aabb" in top:
         ds.meta["aabb"] = True  # a bounded scene: fitting keeps its world box
     return ds
+
+
+def _split_lists(top, path, frames, base):
+    """(frames, note): with nerfstudio's ``train_filenames`` / ``test_filenames`` (else
+    ``val_filenames``), the frames they list with their split, the others left out; else unchanged."""
+    lists = {s: top[f"{s}_filenames"] for s in ("train", "test", "val") if f"{s}_filenames" in top}
+    if not lists:
+        return frames, None
+    if "test" in lists:
+        lists.pop("val", None)
+    key = lambda b, rel: os.path.splitext(os.path.normpath(os.path.join(b, str(rel))))[0]  # noqa: E731
+    own = {key(base[p], f["file_path"]): k for k, (f, p, _) in enumerate(frames)}
+    split = {}
+    for name, files in lists.items():
+        if not isinstance(files, list):
+            raise DatasetError(f"{path}: '{name}_filenames' must be a list of image paths")
+        for rel in files:
+            k = own.get(key(os.path.dirname(path), rel))
+            if k is None:
+                raise DatasetError(f"{path}: '{name}_filenames' lists '{rel}', which no frame's file_path names")
+            split[k] = "train" if name == "train" else "test"
+    if "train" in lists:
+        kept = [(f, p, split[k]) for k, (f, p, _) in enumerate(frames) if k in split]
+        if all(s == "test" for _, _, s in kept):
+            raise DatasetError(f"{path}: 'train_filenames' lists no frame that is not also a test frame")
+    else:  # only an evaluation list: every other frame trains
+        kept = [(f, p, split.get(k, "train")) for k, (f, p, _) in enumerate(frames)]
+    names = " / ".join(f"{n}_filenames" for n in lists)
+    left = len(frames) - len(kept)
+    return kept, f"split from {names}" + (f"; {left} frames listed in neither are left out" if left else "")
+
+
+def _ignore(root, frames, base, shape, factor, undistort, notes):
+    """nerfstudio's ``mask_path`` (black = pixels to ignore; with ``factor`` K, ``masks_K/NAME`` when
+    present, else reduced) undistorted as the images: (N, H, W) bool, True = ignore; None without any."""
+    if not any("mask_path" in f for f, _, _ in frames):
+        return None
+    out = np.zeros((len(frames),) + tuple(shape), bool)
+    for k, (frame, path, _) in enumerate(frames):
+        if "mask_path" not in frame:
+            continue
+        rel = frame["mask_path"]
+        folder = os.path.join(root, f"masks_{factor}") if factor and factor > 1 else None
+        if folder and os.path.isfile(os.path.join(folder, os.path.basename(rel))):
+            p = os.path.join(folder, os.path.basename(rel))
+        else:
+            p = _resolve(base[path], rel, "mask_path", path)
+        keep = read_mask(p, "white")
+        if factor and factor > 1:
+            keep = reduce_mask(keep, shape)
+        if keep.shape != tuple(shape):
+            raise DatasetError(f"{p}: mask_path is {keep.shape[1]}x{keep.shape[0]} but the images are "
+                               f"{shape[1]}x{shape[0]}")
+        out[k] = ~undistort[k](keep, nearest=True)
+    if out.all(axis=(1, 2)).any():
+        k = int(np.flatnonzero(out.all(axis=(1, 2)))[0])
+        raise DatasetError(f"{frames[k][1]}: frame {k}'s mask_path ignores every pixel")
+    notes.append(f"mask_path: {100 * out.mean():.1f}% of the pixels are marked to ignore (black); training "
+                 "leaves them out")
+    return out
 
 
 def _masks(root, frames, base, paths, shape, factor, undistort, notes):

@@ -23,6 +23,8 @@ class Dataset:
     shadow, its reflection), where the photos show the object's effect rather than the background;
     ``backgrounds``/``moved``: ground truth without the object / with it moved by
     ``moved_transform`` (None where the dataset has none; NaN images for views without them).
+    ``ignore``: (N, H, W) bool or None: pixels to leave out of training (nerfstudio's ``mask_path``,
+    black = ignore); the ray bank draws training batches from the others.
     ``points``: (P, 3) sparse world points of the capture (COLMAP, ``ply_file_path``) or None.
     ``meta['notes']``: lines for the user about how the files were read (printed by the fit).
     ``meta['background_color']``: set when RGBA images were composited over that colour (what a ray
@@ -43,6 +45,7 @@ class Dataset:
     moved_transform: np.ndarray | None = None
     masked: np.ndarray | None = None
     points: np.ndarray | None = None
+    ignore: np.ndarray | None = None
     meta: dict = field(default_factory=dict)
 
     def __repr__(self):

@@ -190,10 +190,12 @@ def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chu
 def background_ray_pool(ds, bank, dilation, effects=None):
     """Flat indices (into ``bank``) of unmasked pixels within the masks dilated by ``dilation``; with
     ``effects`` (the dataset's effect masks), those pixels count as masked: the photos show the object's
-    shadow there, not the background."""
+    shadow there, not the background. Pixels the dataset marks to ignore are left out."""
     diag = np.hypot(*ds.size)
     masks = bank.masks_np if effects is None else bank.masks_np | effects[bank.views]
     near = dilate(masks, int(np.ceil(dilation * diag))) & ~masks
+    if bank.ignore_np is not None:
+        near &= ~bank.ignore_np
     return np.flatnonzero(near.reshape(-1)).astype(np.uint32)
 
 

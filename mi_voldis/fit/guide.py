@@ -64,5 +64,6 @@ def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9):
         hole = inpainting_hole(region[k], depth, hit, ds.masks[v], around, nearer)
         images[k] = paint(np.clip(ds.images[v], 0, 1), hole)
     inpainted = dataclasses.replace(ds, images=images, cameras=[ds.cameras[v] for v in train], masks=region,
-                                    split=np.array(["train"] * len(train)), masked=None, effects=None)
+                                    split=np.array(["train"] * len(train)), masked=None, effects=None,
+                                    ignore=None if ds.ignore is None else ds.ignore[train])
     return RayBank(inpainted, np.arange(len(train))), np.flatnonzero(region.reshape(-1)).astype(np.uint32)
