@@ -8,6 +8,8 @@ On a field's packed values t (n stored values: vertices x channels, see :mod:`mi
 import drjit as dr
 import mitsuba as mi
 
+from .activations import sigmoid
+
 
 def tv_gradient(values, width, neighbours):
     """Gradient of TV (module docstring) of packed ``values`` (``width`` floats per vertex) whose vertices
@@ -25,4 +27,4 @@ def tv_gradient(values, width, neighbours):
 
 def sparsity_gradient(raw_density, weight):
     """Gradient of ``weight`` * sum_v softplus(D_v) with respect to raw densities D: weight sigmoid(D)."""
-    return weight * dr.rcp(1.0 + dr.exp(-raw_density))
+    return weight * sigmoid(raw_density)

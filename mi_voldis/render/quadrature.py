@@ -7,28 +7,27 @@ For samples i with density sigma_i and interval length delta_i:
     w_i     = T_i alpha_i                            and  C = sum_i w_i c_i.
 
 Keeping the optical depth sum_{j<i} sigma_j delta_j instead of the product of transmittances avoids
-underflow chains, and alpha uses a cancellation-free 1 - exp(-x), so densities from 1e-6 to 1e8
-give alpha in [0, 1] with full relative precision.
+underflow chains, alpha uses a cancellation-free 1 - exp(-x) and T an exp accurate for every argument
+(:mod:`mi_voldis.activations`, on CUDA's approximate exp too), so densities from 1e-8 to 1e8 give alpha
+in [0, 1] with full relative precision. ``ops``: as in :mod:`mi_voldis.activations`.
 """
-import drjit as dr
-
-from ..activations import one_minus_exp
+from ..activations import DRJIT, exp, one_minus_exp
 
 # Rays stop once every field's transmittance is below exp(-OPTICAL_DEPTH_CUTOFF) = 1e-4: what is left
 # can change a pixel by at most 1e-4 (times its colour).
 OPTICAL_DEPTH_CUTOFF = 9.2103
 
 
-def alpha(optical_depth):
+def alpha(optical_depth, ops=DRJIT):
     """Opacity of one interval, alpha = 1 - exp(-sigma delta)."""
-    return one_minus_exp(optical_depth)
+    return one_minus_exp(optical_depth, ops)
 
 
-def transmittance(optical_depth_before):
+def transmittance(optical_depth_before, ops=DRJIT):
     """T_i = exp(-sum_{j<i} sigma_j delta_j)."""
-    return dr.exp(-optical_depth_before)
+    return exp(-optical_depth_before, ops)
 
 
-def weight(optical_depth_before, optical_depth):
+def weight(optical_depth_before, optical_depth, ops=DRJIT):
     """w_i = T_i alpha_i."""
-    return transmittance(optical_depth_before) * alpha(optical_depth)
+    return transmittance(optical_depth_before, ops) * alpha(optical_depth, ops)
