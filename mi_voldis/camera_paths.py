@@ -11,11 +11,18 @@ capture's field of view and image size unless given.
 * ``interpolate``: through the capture's views in order (positions linearly, rotations by
   spherical linear interpolation of quaternions).
 * nerfstudio ``camera_path.json``: ``camera_path[k].camera_to_world`` (16 numbers, row-major, OpenGL
-  axes), ``fov`` (vertical, degrees), ``render_width`` / ``render_height``; nerfstudio's viewer works in
-  its dataparser's frame, so ``dataparser_transforms.json`` (``transform`` 3x4, ``scale``) maps it back
-  to the capture's world when given: x_viewer = scale * (T x).
+  axes), ``fov`` (vertical, degrees), ``render_width`` / ``render_height``, ``seconds`` (the video's
+  length: frames / seconds is its frame rate, :func:`nerfstudio_fps`); ``camera_type`` perspective
+  (or absent; others are refused). nerfstudio's viewer works in its dataparser's frame: it orients
+  (O) and scales (s) the poses of ``transforms.json``, x_ns = s O x_json, and writes
+  ``dataparser_transforms.json`` with ``transform`` T = O A and ``scale`` S = s a, where A and a are
+  the capture's ``applied_transform`` and ``applied_scale`` (from the original data to
+  ``transforms.json``; nerfstudio's default A for a capture with ``colmap/sparse/0`` and none stated).
+  With both files, x_json = A T^-1 (a x_ns / S): where nerfstudio puts the camera in the capture's
+  world.
 """
 import json
+import os
 
 import numpy as np
 
@@ -121,26 +128,63 @@ def make_path(kind, cameras, frames, near_far=None):
     return {"orbit": orbit, "interpolate": interpolate}[kind](cameras, frames)
 
 
-def read_nerfstudio_path(path, dataparser=None):
-    """Cameras of a nerfstudio ``camera_path.json`` (see the module docstring)."""
+# nerfstudio's applied_transform for COLMAP captures converted before the field existed
+# (nerfstudio_dataparser.py)
+COLMAP_APPLIED = [[0, 1, 0, 0], [1, 0, 0, 0], [0, 0, -1, 0]]
+
+
+def _read_json(path, what):
     try:
         with open(path) as f:
-            data = json.load(f)
+            return json.load(f)
+    except (OSError, ValueError) as e:
+        raise ValueError(f"{path}: not {what} ({type(e).__name__}: {e})") from None
+
+
+def capture_applied(capture):
+    """(A 4x4, a): ``applied_transform`` and ``applied_scale`` of the capture folder ``capture``'s
+    ``transforms.json`` (identity and 1 for other formats, whose world nerfstudio's transform starts
+    from)."""
+    applied, scale = np.eye(4), 1.0
+    path = os.path.join(capture, "transforms.json")
+    if not os.path.isfile(path):
+        return applied, scale
+    meta = _read_json(path, "a transforms.json")
+    try:
+        if "applied_transform" in meta:
+            applied[:3, :4] = np.asarray(meta["applied_transform"], np.float64)[:3, :4]
+        elif os.path.isdir(os.path.join(capture, "colmap", "sparse", "0")):
+            applied[:3, :4] = COLMAP_APPLIED
+        scale = float(meta.get("applied_scale", 1.0))
+    except (ValueError, TypeError) as e:
+        raise ValueError(f"{path}: malformed applied_transform / applied_scale ({e})") from None
+    return applied, scale
+
+
+def read_nerfstudio_path(path, dataparser=None, capture=None):
+    """Cameras of a nerfstudio ``camera_path.json`` in the world of the capture folder ``capture``
+    (its ``applied_transform``, ``applied_scale``), through ``dataparser`` (its
+    ``dataparser_transforms.json``) when given (see the module docstring)."""
+    data = _read_json(path, "a nerfstudio camera path")
+    try:
         width, height = int(data["render_width"]), int(data["render_height"])
         entries = data["camera_path"]
-    except (OSError, ValueError, KeyError, TypeError) as e:
+        kind = str(data.get("camera_type", "perspective"))
+    except (KeyError, TypeError, ValueError) as e:
         raise ValueError(f"{path}: not a nerfstudio camera path ({type(e).__name__}: {e})") from None
+    if kind.lower() != "perspective":
+        raise ValueError(f"{path}: camera_type '{kind}' is not supported (only perspective cameras render)")
     back = np.eye(4)
     if dataparser is not None:
+        dp = _read_json(dataparser, "a dataparser_transforms.json")
         try:
-            with open(dataparser) as f:
-                dp = json.load(f)
             t = np.eye(4)
             t[:3, :4] = np.asarray(dp["transform"], np.float64)[:3, :4]
             scale = float(dp["scale"])
-        except (OSError, ValueError, KeyError, TypeError) as e:
+        except (KeyError, ValueError, TypeError) as e:
             raise ValueError(f"{dataparser}: not a dataparser_transforms.json ({type(e).__name__}: {e})") from None
-        back = np.linalg.inv(t) @ np.diag([1 / scale, 1 / scale, 1 / scale, 1.0])
+        applied, applied_scale = capture_applied(capture) if capture else (np.eye(4), 1.0)
+        back = applied @ np.linalg.inv(t) @ np.diag([applied_scale / scale] * 3 + [1.0])
     out = []
     for k, entry in enumerate(entries):
         try:
@@ -155,3 +199,18 @@ def read_nerfstudio_path(path, dataparser=None):
     if not out:
         raise ValueError(f"{path}: the camera path is empty")
     return out
+
+
+def nerfstudio_fps(path):
+    """The frame rate nerfstudio renders a ``camera_path.json`` at: its frames over its ``seconds``;
+    None without ``seconds``."""
+    data = _read_json(path, "a nerfstudio camera path")
+    if "seconds" not in data:
+        return None
+    try:
+        seconds = float(data["seconds"])
+    except (TypeError, ValueError):
+        seconds = float("nan")
+    if not seconds > 0:
+        raise ValueError(f"{path}: 'seconds' must be a positive number, got {data['seconds']!r}")
+    return len(data["camera_path"]) / seconds

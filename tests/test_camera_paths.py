@@ -75,6 +75,78 @@ def test_nerfstudio_camera_path_through_a_dataparser_transform(tmp_path):
         camera_paths.read_nerfstudio_path(str(path))
 
 
+def rigid(angle_deg, axis, t):
+    """4x4 rotation about ``axis`` (Rodrigues) then translation ``t``."""
+    a, k = np.radians(angle_deg), np.asarray(axis, np.float64) / np.linalg.norm(axis)
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    m = np.eye(4)
+    m[:3, :3] = np.eye(3) + np.sin(a) * kx + (1 - np.cos(a)) * kx @ kx
+    m[:3, 3] = t
+    return m
+
+
+def test_nerfstudio_path_lands_where_nerfstudio_puts_the_capture(tmp_path):
+    """A capture whose applied_transform A is not the identity and whose applied_scale a is 0.5. By
+    nerfstudio_dataparser.py: its poses are oriented and centred (O), then scaled by s (auto scale);
+    dataparser_transforms.json holds transform = O @ [A; 0 0 0 1] and scale = s * a. A camera path
+    of the dataset's own poses as nerfstudio holds them, read with both files, gives the dataset's
+    cameras back."""
+    cams = orbit(3, TARGET, 2.0, (10, 40), 50.0, 40, 30)
+    applied = rigid(90, [1, 0, 0], [0.0, 0.0, 0.0]) @ rigid(35, [0.2, 1, 0.1], [1.5, -2.0, 0.7])
+    applied_scale = 0.5
+    orient = rigid(-20, [0.3, 0.1, 1], [-0.4, 0.9, 2.0])
+    s = 0.37
+    capture = tmp_path / "capture"
+    capture.mkdir()
+    (capture / "transforms.json").write_text(json.dumps({"applied_transform": applied[:3].tolist(),
+                                                         "applied_scale": applied_scale, "frames": []}))
+    entries = []
+    for c in cams:
+        pose = orient @ mitsuba_to_opengl(c.to_world)  # auto_orient_and_center_poses, then the scale
+        pose[:3, 3] *= s
+        fov_y = np.degrees(2 * np.arctan(np.tan(np.radians(c.fov_x) / 2) * c.height / c.width))
+        entries.append({"camera_to_world": pose.ravel().tolist(), "fov": fov_y})
+    path = tmp_path / "camera_path.json"
+    path.write_text(json.dumps({"render_width": 40, "render_height": 30, "camera_path": entries, "seconds": 1.5}))
+    dp = tmp_path / "dataparser_transforms.json"
+    dp.write_text(json.dumps({"transform": (orient @ applied)[:3].tolist(), "scale": s * applied_scale}))
+    back = camera_paths.read_nerfstudio_path(str(path), str(dp), str(capture))
+    for a, b in zip(back, cams):
+        np.testing.assert_allclose(a.to_world, b.to_world, atol=1e-9)
+    ignored = camera_paths.read_nerfstudio_path(str(path), str(dp))  # without the capture's A and a
+    assert np.linalg.norm(ignored[0].to_world[:3, 3] - cams[0].to_world[:3, 3]) > 1.0
+    assert camera_paths.nerfstudio_fps(str(path)) == pytest.approx(2.0)  # nerfstudio: len(cameras) / seconds
+
+
+@pytest.mark.parametrize("kind", ["equirectangular", "fisheye", "omnidirectional"])
+def test_nerfstudio_path_refuses_other_camera_types(tmp_path, kind):
+    path = tmp_path / "camera_path.json"
+    path.write_text(json.dumps({"render_width": 40, "render_height": 20, "camera_type": kind, "camera_path": [
+        {"camera_to_world": np.eye(4).ravel().tolist(), "fov": 50}]}))
+    with pytest.raises(ValueError, match=f"camera_path.json: camera_type '{kind}' is not supported"):
+        camera_paths.read_nerfstudio_path(str(path))
+
+
+def test_render_nerfstudio_path_at_its_frame_rate(tiny_run, tmp_path):
+    """2 frames over 1 s: the video runs at 2 frames per second, as nerfstudio renders it."""
+    import imageio.v3 as iio
+    from test_bad_inputs import _boundary, script
+
+    from mi_voldis.data import load_dataset
+    with open(os.path.join(tiny_run, "config.json")) as f:
+        cams = load_dataset(json.load(f)["dataset"]["path"]).cameras[:2]
+    path = tmp_path / "camera_path.json"
+    path.write_text(json.dumps({"render_width": 16, "render_height": 12, "seconds": 1.0, "camera_path": [
+        {"camera_to_world": mitsuba_to_opengl(c.to_world).ravel().tolist(), "fov": 40.0} for c in cams]}))
+    out = tmp_path / "ns"
+    assert _boundary.run(script("render").main, [os.path.join(tiny_run, "scene.xml"), "--out", str(out),
+                                                 "--path", str(path), "--spp", "1"]) == 0
+    video = next(out.glob("composite.*"))
+    meta = iio.immeta(video)
+    fps = meta["fps"] if video.suffix == ".mp4" else 1000.0 / meta["duration"]  # GIF: ms per frame
+    assert fps == pytest.approx(2.0)
+
+
 def test_render_path_writes_frames_and_a_video(tiny_run, tmp_path, capsys):
     from test_bad_inputs import _boundary, script
     out = str(tmp_path / "orbit")

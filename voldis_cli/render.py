@@ -40,7 +40,8 @@ def camera_path(args, record):
     training views (``--cameras DATASET``, else the run's own dataset)."""
     from mi_voldis import camera_paths
     if args.path.endswith(".json"):
-        return camera_paths.read_nerfstudio_path(args.path, args.dataparser_transforms)
+        capture = args.cameras or (record or {}).get("path")
+        return camera_paths.read_nerfstudio_path(args.path, args.dataparser_transforms, capture)
     if args.path not in camera_paths.PATHS:
         raise ValueError(f"--path must be {', '.join(camera_paths.PATHS)} or a camera_path.json, got '{args.path}'")
     from mi_voldis.data import load_dataset
@@ -66,7 +67,8 @@ def main(argv=None):
     ap.add_argument("--path", metavar="KIND", help="a camera path instead: orbit, spiral, interpolate (through the "
                     "capture's views) or a nerfstudio camera_path.json; writes an EXR sequence and a video")
     ap.add_argument("--frames", type=positive, default=60, help="frames of --path orbit / spiral / interpolate")
-    ap.add_argument("--fps", type=positive, default=24, help="video frame rate")
+    ap.add_argument("--fps", type=positive, default=None,
+                    help="video frame rate (default: a camera_path.json's frames / seconds, else 24)")
     ap.add_argument("--layer", default="composite", choices=("composite", "full", "bg", "fg"),
                     help="the layer shown in the video")
     ap.add_argument("--dataparser-transforms", help="nerfstudio's dataparser_transforms.json for a camera_path.json")
@@ -92,7 +94,11 @@ def main(argv=None):
         if size:
             from mi_voldis.cameras import Camera
             path_cameras = [Camera(c.to_world, c.fov_x, *size, c.principal) for c in path_cameras]
-        exrs, video = render_path(scene, args.out, path_cameras, args.spp, args.layer, args.fps)
+        fps = args.fps
+        if fps is None:
+            from mi_voldis.camera_paths import nerfstudio_fps
+            fps = (nerfstudio_fps(args.path) if args.path.endswith(".json") else None) or 24
+        exrs, video = render_path(scene, args.out, path_cameras, args.spp, args.layer, fps)
         if not args.quiet:
             print(f"{len(exrs)} frames: {os.path.dirname(exrs[0])}/frame_NNNN.exr\nvideo: {video}")
         return
