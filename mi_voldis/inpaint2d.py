@@ -2,8 +2,9 @@
 
 An *inpainter* is any callable ``(image (H, W, 3) float in [0, 1], hole (H, W) bool) -> (H, W, 3)``
 that replaces the hole's pixels; :data:`INPAINTERS` names the built-in ones (OpenCV's Telea and
-Navier-Stokes, OpenCV contrib's frequency-selective reconstruction, and the harmonic membrane). A
-learned inpainter (LaMa and the like) plugs in through the same signature.
+Navier-Stokes, OpenCV contrib's frequency-selective reconstruction, and the harmonic membrane), and
+'auto' the best one installed: 'fsr' where OpenCV has its contrib modules, else 'telea'. A learned
+inpainter (LaMa and the like) plugs in through the same signature.
 
 Depth is filled as disparity q = 1 / z (z: depth along the optical axis): on a plane, q is an affine
 function of the pixel coordinates (a point X = z (x', y', 1) in the camera frame, x' and y' affine in
@@ -34,7 +35,7 @@ def fsr_inpaint(image, hole):
     import cv2
     if not hasattr(cv2, "xphoto"):
         raise RuntimeError("inpainter 'fsr' needs OpenCV's contrib modules (cv2.xphoto): pip install "
-                           "opencv-contrib-python-headless, or --set prior_inpainter=\"telea\"")
+                           "opencv-contrib-python-headless, or --set prior_inpainter=\"auto\" (the best one installed)")
     img8 = np.round(np.clip(image, 0, 1) * 255).astype(np.uint8)
     out = np.zeros_like(img8)
     cv2.xphoto.inpaint(img8, np.where(hole, 0, 255).astype(np.uint8), out, cv2.xphoto.INPAINT_FSR_FAST)
@@ -58,13 +59,56 @@ BASELINES = {"telea": "OpenCV Telea", "ns": "OpenCV Navier-Stokes", "fsr": "Open
 """What a user would inpaint in 2D instead (on each view itself), compared in every removal report."""
 
 
+# 'auto' without OpenCV's contrib modules: in reports/removal.md Telea's in-mask PSNR is above
+# Navier-Stokes' on 5 of the 7 ground-truth scenes (FSR, where installed, is best on 5 of 7)
+FALLBACK = "telea"
+
+
+def has_contrib():
+    """Whether OpenCV's contrib modules (``cv2.xphoto``, which 'fsr' needs) are installed."""
+    import cv2
+    return hasattr(cv2, "xphoto")
+
+
+def resolve(name):
+    """The built-in inpainter that the name ``name`` stands for: 'auto' is 'fsr' where OpenCV has its
+    contrib modules and :data:`FALLBACK` where not; any other name itself."""
+    if name == "auto":
+        return "fsr" if has_contrib() else FALLBACK
+    return name
+
+
+def fallback_note(name):
+    """The one line that says which inpainter 'auto' uses instead of 'fsr', or None when it is 'fsr' (or
+    ``name`` is no 'auto')."""
+    if name != "auto" or resolve(name) == "fsr":
+        return None
+    return (f"OpenCV has no contrib modules (cv2.xphoto): the 2D prior inpaints with {FALLBACK!r} instead of 'fsr' "
+            "(pip install opencv-contrib-python-headless for it)")
+
+
 def inpainter(name_or_callable):
-    """The inpainter named ``name_or_callable`` in :data:`INPAINTERS`, or the callable itself."""
+    """The inpainter named ``name_or_callable`` in :data:`INPAINTERS` (or 'auto', :func:`resolve`), or the
+    callable itself."""
     if callable(name_or_callable):
         return name_or_callable
-    if name_or_callable not in INPAINTERS:
-        raise ValueError(f"unknown inpainter {name_or_callable!r}: one of {', '.join(INPAINTERS)} or a callable")
-    return INPAINTERS[name_or_callable]
+    name = resolve(name_or_callable)
+    if name not in INPAINTERS:
+        raise ValueError(f"unknown inpainter {name_or_callable!r}: one of auto, {', '.join(INPAINTERS)} or a callable")
+    return INPAINTERS[name]
+
+
+def inpainter_name(name_or_callable):
+    """What a run's metrics record as its inpainter: the built-in name 'auto' resolved to, or a callable's
+    ``__name__``."""
+    if callable(name_or_callable):
+        return getattr(name_or_callable, "__name__", type(name_or_callable).__name__)
+    return resolve(name_or_callable)
+
+
+def available_baselines():
+    """The names of :data:`BASELINES` that run here ('fsr' only with OpenCV's contrib modules)."""
+    return [name for name in BASELINES if name != "fsr" or has_contrib()]
 
 
 def harmonic_fill(values, hole, iterations=3000, tol=1e-6):

@@ -12,7 +12,7 @@ from mi_voldis.field_state import new_field, vertex_positions
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.lift import lift_pixels, write_surface
 from mi_voldis.fit.visibility import seen_elsewhere
-from mi_voldis.inpaint2d import INPAINTERS, fill_disparity, harmonic_fill, inpainter
+from mi_voldis.inpaint2d import INPAINTERS, fill_disparity, harmonic_fill, has_contrib, inpainter, resolve
 from mi_voldis.metrics import dilate, object_residue
 from mi_voldis.render.views import render_camera
 from mi_voldis.scene import build_integrator, integrator_properties
@@ -79,6 +79,11 @@ def test_inpainters_are_named_or_callable():
         inpainter("lama")
 
 
+needs_contrib = pytest.mark.skipif(not has_contrib(), reason="needs OpenCV's contrib modules (cv2.xphoto): "
+                                                               "opencv-contrib-python-headless is not installed")
+
+
+@needs_contrib
 def test_fsr_continues_stripes_that_telea_smears():
     """Vertical stripes (period 8 px) with a 12 x 12 hole: OpenCV contrib's frequency-selective
     reconstruction carries the stripes through (under a third of Telea's error there), the known pixels
@@ -101,9 +106,56 @@ def test_fsr_without_the_contrib_modules_says_what_to_install(monkeypatch):
         inpainter("fsr")(np.zeros((8, 8, 3), np.float32), np.ones((8, 8), bool))
 
 
+@needs_contrib
+def test_auto_is_fsr_with_the_contrib_modules():
+    assert resolve("auto") == "fsr" and inpainter("auto") is INPAINTERS["fsr"]
+
+
+def test_auto_without_the_contrib_modules_is_telea(monkeypatch):
+    """'auto' on an OpenCV without cv2.xphoto (opencv-python, nerfstudio's) is Telea, and says so in a
+    line that names the package to install; an explicit 'fsr' still fails."""
+    import cv2
+
+    from mi_voldis.inpaint2d import fallback_note
+    monkeypatch.delattr(cv2, "xphoto", raising=False)
+    assert not has_contrib() and resolve("auto") == "telea" and inpainter("auto") is INPAINTERS["telea"]
+    assert "opencv-contrib-python-headless" in fallback_note("auto") and "\n" not in fallback_note("auto")
+    assert fallback_note("telea") is None
+    with pytest.raises(RuntimeError, match="opencv-contrib-python-headless"):
+        inpainter("fsr")(np.zeros((8, 8, 3), np.float32), np.ones((8, 8), bool))
+
+
+def test_a_fit_without_the_contrib_modules_uses_telea_and_records_it(monkeypatch, tmp_path, capsys):
+    """The default prior ('auto') on an OpenCV without cv2.xphoto: the guided refit runs with Telea, one
+    note on stderr says so, and the state's prior (metrics.json's bg_prior) records it."""
+    import cv2
+
+    from mi_voldis.fit.train import fit
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene(views=5)
+    monkeypatch.delattr(cv2, "xphoto", raising=False)
+    cfg = cfg.replace(bg_strategy="guided", steps_bg=2, prior_inpainter="auto")
+    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, cfg.adam_beta1, cfg.adam_beta2),
+                     fields={"full": full})
+    state.schedule, state.steps_full = [[0, 40]], 1
+    checkpoint = str(tmp_path / "state.npz")
+    state.save(checkpoint, "bg", 0)
+    _, state = fit(ds, checkpoint, cfg, resume=True, progress=True)
+    notes = [line for line in capsys.readouterr().err.splitlines() if "cv2.xphoto" in line]
+    assert len(notes) == 1 and notes[0].startswith("note: ") and "'telea'" in notes[0]
+    assert state.prior["inpainter"] == "telea"
+
+
+def test_the_run_records_its_inpainter(tiny_run):
+    """metrics.json's bg_prior names the 2D inpainter the default 'auto' became on this machine."""
+    import json
+    import os
+    with open(os.path.join(tiny_run, "metrics.json")) as f:
+        assert json.load(f)["bg_prior"]["inpainter"] == resolve("auto")
+
+
 def test_a_fit_without_its_inpainter_stops_before_fitting_anything(monkeypatch, tmp_path):
-    """The default prior needs cv2.xphoto: without it the fit says so at once, not after the full
-    phase, and writes no checkpoint."""
+    """A prior asked to use 'fsr' needs cv2.xphoto: without it the fit says so at once, not after the
+    full phase, and writes no checkpoint."""
     import cv2
 
     from mi_voldis.fit.train import fit
@@ -369,7 +421,7 @@ def test_removal_leaves_nothing_of_the_object(strategy, tmp_path):
             assert error < 0.5 * np.abs(ds.images[v][mask] - ds.backgrounds[v][mask]).mean()
     if strategy == "lift":
         assert set(state.prior["reference_views"]) <= set(ds.train.tolist())
-        assert state.prior["vertices_written"] > 0
+        assert state.prior["vertices_written"] > 0 and state.prior["inpainter"] == "telea"
 
 
 def sphere_seen_unmasked(ds, pts, voxel, centre, radius=0.3, grow=1):

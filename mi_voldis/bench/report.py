@@ -2,7 +2,7 @@
 import os
 import shutil
 
-from ..inpaint2d import BASELINES
+from ..inpaint2d import BASELINES, available_baselines
 from . import rays
 from .machine import BYTES_FORWARD, BYTES_TABLE, BYTES_TRAIN
 from .run import msps_bound, time_to_within
@@ -257,8 +257,7 @@ def write_removal(results, report_dir, command):
             md += ["", _shadow_line(shadow)]
         sheet = _removal_sheet(fit["out"], entry["strategies"], os.path.join(report_dir, f"removal_{scene}.png"))
         if sheet:
-            md += ["", f"![{scene}]({sheet}) Rows: photo, ground-truth background, OpenCV Telea, "
-                       "OpenCV contrib FSR, then "
+            md += ["", f"![{scene}]({sheet}) Rows: photo, ground-truth background, {_sheet_baselines()}, then "
                        + ", ".join(f"`{s}`" for s in entry["strategies"]) + "; columns: the first held-out views."]
         md.append("")
     for capture, entry in results.get("captures", {}).items():
@@ -284,7 +283,7 @@ def write_removal(results, report_dir, command):
         sheet = _removal_sheet(entry["fit"]["out"], entry["strategies"],
                                os.path.join(report_dir, f"removal_{capture}.png"), views=None)
         if sheet:
-            md += ["", f"![{capture}]({sheet}) Rows: photo, OpenCV Telea, OpenCV contrib FSR, then "
+            md += ["", f"![{capture}]({sheet}) Rows: photo, {_sheet_baselines()}, then "
                        + ", ".join(f"`{s}`" for s in entry["strategies"]) + "; columns: every held-out view."]
         md.append("")
     path = os.path.join(report_dir, "removal.md")
@@ -357,6 +356,13 @@ def _removal_targets(results):
 SHEET_WIDTH = 1600  # pixels across a removal sheet at most
 
 
+SHEET_BASELINES = ("telea", "fsr")  # the 2D inpaintings a removal contact sheet shows, where installed
+
+
+def _sheet_baselines():
+    return ", ".join(BASELINES[name] for name in SHEET_BASELINES if name in available_baselines())
+
+
 def _removal_sheet(run, strategies, path, views=3):
     """One PNG: for the first ``views`` held-out views (None: all; columns), the photo, the ground-truth
     background (when the dataset has one), OpenCV's Telea and contrib FSR inpaintings and each
@@ -383,7 +389,7 @@ def _removal_sheet(run, strategies, path, views=3):
     if ds.backgrounds is not None:
         rows.append([display_to_uint8(ds.backgrounds[v]) for v in tests])
     rows += [[display_to_uint8(inpainter(name)(ds.images[v], dilate(ds.masks[v], dil))) for v in tests]
-             for name in ("telea", "fsr")]
+             for name in SHEET_BASELINES if name in available_baselines()]
     rows += [[iio.imread(os.path.join(r["out"], f"view{v:03d}_bg.png"))[..., :3] for v in tests]
              for r in strategies.values()]
     images = [im for row in rows for im in row]

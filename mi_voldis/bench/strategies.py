@@ -47,7 +47,7 @@ def refit_config(run, strategy, sets=()):
 def evaluate(ds, integrator, dilation_fraction, hull_min_views=0.9):
     """Per-method rows (the volume's background, then each 2D baseline) and the volume's held-out renders."""
     from ..compositing import composite_channels
-    from ..inpaint2d import BASELINES, inpainter
+    from ..inpaint2d import available_baselines, inpainter
     from ..metrics import dilate, iou, object_residue, psnr
     from ..render.views import layer_channels, render_camera
     from ..tasks.removal import consistency, consistency_shares
@@ -58,7 +58,7 @@ def evaluate(ds, integrator, dilation_fraction, hull_min_views=0.9):
     tests = scored or (list(ds.test) if ds.masks is not None else [])
     renders = {v: render_camera(integrator, ds.cameras[v], ("full", "bg", "fg")) for v in tests}
     images = {"volume": {v: np.clip(renders[v]["bg"][0], 0, 1) for v in tests}}
-    for name in BASELINES:
+    for name in available_baselines():
         images[name] = {v: inpainter(name)(ds.images[v], dilate(ds.masks[v], dil)) for v in tests}
     depth = {v: renders[v]["bg"][2] for v in tests}
     # the masked pixels whose background (at the volume's depth) some training view sees unmasked

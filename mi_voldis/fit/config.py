@@ -153,10 +153,12 @@ class FitConfig(Settings):
     prior_rays: float = setting(0.25, "rays of that prior per step, fraction of batch_rays", above=0, high=1)
     prior_views: int = setting(4, "reference views inpainted and lifted in turn, each where the background "
                                   "still has a hole (bg_strategy 'lift')", low=1)
-    prior_inpainter: str = setting("fsr", "2D inpainter of the prior's views ('guided': every masked view, "
-                                              "'lift': the reference views): 'telea' or 'ns' (OpenCV), 'fsr' "
-                                              "(OpenCV contrib's frequency-selective reconstruction), "
-                                              "'membrane' (harmonic)", choices=("telea", "ns", "fsr", "membrane"))
+    prior_inpainter: str = setting("auto", "2D inpainter of the prior's views ('guided': every masked view, "
+                                               "'lift': the reference views): 'telea' or 'ns' (OpenCV), 'fsr' "
+                                               "(OpenCV contrib's frequency-selective reconstruction), "
+                                               "'membrane' (harmonic), 'auto' ('fsr' where OpenCV has its contrib "
+                                               "modules, else 'telea'; metrics.json: bg_prior.inpainter)",
+                                   choices=("auto", "telea", "ns", "fsr", "membrane"))
     hull_dilation: float = setting(0.03, "mask dilation for the visual hull, fraction of image diagonal",
                                    low=0, high=1)
     hull_min_views: float = setting(0.9, "a cell is in the hull if inside the dilated mask in this fraction of "

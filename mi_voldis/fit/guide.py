@@ -23,7 +23,7 @@ import dataclasses
 
 import numpy as np
 
-from ..inpaint2d import inpainter
+from ..inpaint2d import inpainter, inpainter_name
 from ..metrics import dilate
 from ..raybank import RayBank
 from ..render.surface import median_depth
@@ -46,7 +46,8 @@ def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9):
     fit's bank, so ray views index the same colour corrections) whose colours are each masked view's
     photo inpainted with ``fill`` (an inpainter of :mod:`mi_voldis.inpaint2d`) in its mask grown by
     ``dilation`` of the diagonal (occluders within ``ring`` of the diagonal left out of the sources,
-    :func:`inpainting_hole`), and the flat indices of those masked pixels."""
+    :func:`inpainting_hole`), and the flat indices of those masked pixels. Records the inpainter used in
+    ``state.prior`` (metrics.json's ``bg_prior.inpainter``)."""
     ds = inputs.ds
     diag = np.hypot(*ds.size)
     grow, around = int(np.ceil(dilation * diag)), int(np.ceil(ring * diag))
@@ -55,6 +56,7 @@ def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9):
     images = ds.images[train].copy()
     region = np.zeros((len(train),) + tuple(ds.size), bool)
     paint = inpainter(fill)
+    state.prior = {**(state.prior or {}), "inpainter": inpainter_name(fill)}
     integrator = fit_integrator(inputs, state)
     for k, v in enumerate(train):
         if v not in masked:

@@ -22,7 +22,7 @@ from ..activations import logit
 from ..cameras import pixel_rays
 from ..device import from_numpy
 from ..field_state import FieldState, density_raw_for_alpha, resample
-from ..inpaint2d import fill_disparity, inpainter
+from ..inpaint2d import fill_disparity, inpainter, inpainter_name
 from ..metrics import dilate
 from ..render.surface import median_depth
 from ..render.views import render_camera
@@ -217,7 +217,7 @@ def lift_prior(inputs, state, allowed, views=4, fill="telea", dilation=0.01, tol
     around the mask continues (a way through the cleared hull). ``allowed(field)``: Float per stored
     vertex, > 0 where writing is allowed (the cleared hull). Returns a summary (per reference view its
     hole pixels, the fraction of them another view sees unmasked (:mod:`mi_voldis.fit.visibility`);
-    the vertices written) and their lattice keys."""
+    the vertices written; the inpainter used) and their lattice keys."""
     ds = inputs.ds
     refs = reference_views(ds, views)
     if not refs:
@@ -246,5 +246,5 @@ def lift_prior(inputs, state, allowed, views=4, fill="telea", dilation=0.01, tol
         seen_share.append(float(seen.mean()))
     written = np.unique(np.concatenate(written))
     summary = {"reference_views": [int(v) for v in refs], "hole_pixels": holes, "seen_elsewhere": seen_share,
-               "vertices_written": int(len(written))}
+               "vertices_written": int(len(written)), "inpainter": inpainter_name(fill)}
     return summary, written

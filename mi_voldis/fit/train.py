@@ -46,6 +46,7 @@ import numpy as np
 
 from .. import exposure
 from ..field_state import FieldState, neighbour_vertices
+from ..inpaint2d import fallback_note
 from ..inpaint2d import inpainter as get_inpainter
 from ..metrics import psnr
 from ..optim.adam import Adam
@@ -92,7 +93,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         raise ValueError(f"{checkpoint}: no checkpoint to resume from")
     has_masks = dataset.masks is not None
     if has_masks and cfg.bg_strategy in ("guided", "lift"):  # fail now, not after the full phase
-        check_inpainter(inpainter or cfg.prior_inpainter)
+        check_inpainter(inpainter or cfg.prior_inpainter, progress)
     scratch = cfg.bg_strategy == "scratch" and has_masks
     roles = ("full", "bg") if scratch else ("full",)
     if state is None:
@@ -173,9 +174,13 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     return inputs, state
 
 
-def check_inpainter(fill):
+def check_inpainter(fill, progress=True):
     """Run the 2D inpainter ``fill`` (a name or a callable) on a tiny image: raises what it would raise
-    in the background phase (e.g. a missing library) before any fitting."""
+    in the background phase (e.g. a missing library) before any fitting. With ``progress``, a note says
+    which inpainter 'auto' uses where it cannot use 'fsr'."""
+    note = fallback_note(fill) if isinstance(fill, str) else None
+    if note and progress:
+        print(f"note: {note}", file=sys.stderr)
     image, hole = np.full((8, 8, 3), 0.5, np.float32), np.zeros((8, 8), bool)
     hole[3:5, 3:5] = True
     get_inpainter(fill)(image, hole)

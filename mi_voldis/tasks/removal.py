@@ -2,7 +2,7 @@
 
 Measured against the ground truth where the dataset has it, and against 2D inpainting per view with
 the same dilated masks (:data:`~mi_voldis.inpaint2d.BASELINES`: OpenCV's Telea and Navier-Stokes,
-OpenCV contrib's FSR): PSNR / SSIM inside the masks, the
+OpenCV contrib's FSR where installed): PSNR / SSIM inside the masks, the
 object's residue (:func:`mi_voldis.metrics.object_residue`: the share of its pixels still closer to its
 own colour than to the true background), and
 view-to-view consistency: each held-out view's inpainting, reprojected into its nearest held-out
@@ -13,7 +13,7 @@ construction).
 import numpy as np
 
 from ..cameras import pixel_rays, project
-from ..inpaint2d import BASELINES, inpainter
+from ..inpaint2d import available_baselines, inpainter
 from ..metrics import dilate, object_residue, psnr, ssim
 
 
@@ -115,12 +115,13 @@ def run(run, output, progress=True):
         return output.finish({"task": "removal", "note": "dataset has no object masks: nothing to remove"})
     dilation = output.settings.mask_dilation
     dil = int(np.ceil(dilation * np.hypot(*ds.size)))
-    methods = {"volume": {}, **{name: {} for name in BASELINES}}
+    baselines = available_baselines()
+    methods = {"volume": {}, **{name: {} for name in baselines}}
     depth = {}
     for v in ds.test:
         region = dilate(ds.masks[v], dil)
         methods["volume"][v] = np.clip(renders[v]["bg"][0], 0, 1)
-        for name in BASELINES:
+        for name in baselines:
             methods[name][v] = inpainter(name)(ds.images[v], region)
         depth[v] = renders[v]["bg"][2]
     rows = {}
