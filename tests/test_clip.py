@@ -151,6 +151,17 @@ def test_loss_gradient(guide):
         assert numeric == pytest.approx(grad[y, x, c], rel=0.05, abs=0.02 * float(flat.max()))
 
 
+def test_the_model_runs_on_the_variants_device(guide):
+    """Dr.Jit hands CUDA tensors to CLIP under cuda_ad_rgb: the model follows them there (and NumPy
+    images to it), and the terms are those of the CPU model's."""
+    composite, background, _ = images(2)
+    cpu = [guide.similarity(np.array(t)) for t in (composite, background)]
+    guide.cosines(composite, composite, background)
+    assert guide.device.type == ("cuda" if mi.variant().startswith("cuda") else "cpu")
+    assert next(guide.model.parameters()).device.type == guide.device.type
+    assert [guide.similarity(np.array(t)) for t in (composite, background)] == pytest.approx(cpu, abs=1e-5)
+
+
 def test_descent_raises_similarity(guide):
     """Adam on a 16 x 16 colour parameter (sigmoid, repeated 8 x 8 to 128 x 128) raises the
     similarity of the mask-composited view to the prompt."""

@@ -25,6 +25,8 @@ import torch
 import torch.nn.functional as F
 from transformers import AutoTokenizer, CLIPModel
 
+from .placement import device_of, follow
+
 CLIP_MEAN = (0.48145466, 0.4578275, 0.40821073)
 CLIP_STD = (0.26862954, 0.26130258, 0.27577711)
 
@@ -71,8 +73,11 @@ class ClipGuide:
     """A frozen CLIP model from the local folder ``model_dir`` and the embedding of ``prompt``.
 
     ``threads`` sets torch's intra-op thread count (process-wide). Raises ``ValueError`` naming the folder
-    when it is missing or not a loadable CLIP model.
+    when it is missing or not a loadable CLIP model. The model runs on the device of the images it is
+    given (moved there once, :mod:`mi_voldis.tasks.placement`); NumPy images go to where it is.
     """
+
+    MOVED = ("model", "mean", "std", "text")  # what runs on the inputs' device
 
     def __init__(self, model_dir, prompt, threads=None):
         model_dir = os.fspath(model_dir)
@@ -91,6 +96,7 @@ class ClipGuide:
             raise ValueError(f"{model_dir}: the CLIP weights lack {len(info['missing_keys'])} parameters "
                              f"(e.g. {sorted(info['missing_keys'])[0]})")
         self.model = model.eval().requires_grad_(False)
+        self.device = torch.device("cpu")
         self.size = int(model.config.vision_config.image_size)
         mean, std = image_normalisation(model_dir)
         self.mean = torch.tensor(mean, dtype=torch.float32).view(1, 3, 1, 1)
@@ -102,7 +108,8 @@ class ClipGuide:
             self.text = F.normalize(model.text_projection(text.pooler_output), dim=-1)[0]
 
     def embed(self, images):
-        """L2-normalised ``E_I`` of a torch batch (N, H, W, 3) in [0, 1]: (N, D)."""
+        """L2-normalised ``E_I`` of a torch batch (N, H, W, 3) in [0, 1]: (N, D), on the batch's device."""
+        follow(self, self.MOVED, device_of([images]))
         x = F.interpolate(images.permute(0, 3, 1, 2), size=(self.size, self.size), mode="bilinear",
                           align_corners=False)
         pooled = self.model.vision_model(pixel_values=(x - self.mean) / self.std).pooler_output
@@ -110,7 +117,7 @@ class ClipGuide:
 
     def similarity(self, image):
         """cos(E_I(image), E_T(prompt)) of a NumPy (H, W, 3) image in [0, 1], as a float."""
-        x = torch.from_numpy(np.ascontiguousarray(image, dtype=np.float32))[None]
+        x = torch.from_numpy(np.ascontiguousarray(image, dtype=np.float32))[None].to(self.device)
         with torch.no_grad():
             return float(self.embed(x)[0] @ self.text)
 
