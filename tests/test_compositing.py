@@ -48,7 +48,56 @@ def test_foreground_over_background_rebuilds_the_scene(tmp_path):
     same = np.all(np.abs(np.stack([raw[f"full.{c}"] - raw[f"bg.{c}"] for c in "RGBA"], -1)) < 1e-6, axis=-1)
     assert same.any() and out["fg.A"][same].max() < 1e-3 and out["fg.A"].max() > 0.5
     assert out["fg.R"].sum() > 3 * out["fg.G"].sum()  # it is red
-    assert np.all(out["fg.Z"][out["fg.A"] == 0] == 0)
+    assert np.all(out["fg_depth.Z"][out["fg.A"] == 0] == 0)
+
+
+def exr_passes(names):
+    """Channel names grouped as the readers group them. Nuke: layer = the name before the last dot
+    (none: the main layer 'rgba'), channel = the token after it. Blender (multilayer): channel = the
+    last token, pass = the token before it (a bare R/G/B/A: 'Combined', Z: 'Depth'), view layer = the
+    tokens before that. Returns (Nuke's {layer: channels}, Blender's {(view layer, pass): channels})."""
+    nuke, blender = {}, {}
+    for name in names:
+        layer, _, chan = name.rpartition(".")
+        nuke.setdefault(layer or "rgba", set()).add(chan)
+        tokens = name.split(".")
+        if len(tokens) == 1:
+            key = ("", "Depth" if name == "Z" else "Combined")
+        else:
+            key = (".".join(tokens[:-2]), tokens[-2])
+        blender.setdefault(key, set()).add(tokens[-1])
+    return nuke, blender
+
+
+def test_exr_layers_read_as_blender_and_nuke_group_them(tmp_path):
+    """Every colour layer of a written EXR is one RGBA pass and every depth its own Z pass, in Nuke's and
+    Blender's grouping (a fifth channel in a colour pass leaves Blender's compositor without the image).
+    Read back, fg over bg is full in RGB within 1e-3 at every pixel, and in alpha wherever a matte
+    exists that gives both (a_min <= a_alpha + tol / (1 - bg.A), compositing's docstring); elsewhere
+    over has (a_min - a_alpha)(1 - bg.A) more alpha. The background here is partly transparent, so
+    alpha pins the matte."""
+    from mi_voldis.compositing import IDENTITY_TOL, minimum_matte
+    full, bg = background_and_object(2)
+    scene = ortho_scene({"type": "voldis", "samples": 64, "full": full, "bg": bg}, size=32, extent=1.0)
+    exr = render_scene_files(scene, str(tmp_path))[0]
+    ch = read_exr(exr)
+    nuke, blender = exr_passes(ch)
+    rgba, z = {"R", "G", "B", "A"}, {"Z"}
+    assert nuke == {"rgba": rgba, "full": rgba, "bg": rgba, "fg": rgba,
+                    "depth": z, "full_depth": z, "bg_depth": z, "fg_depth": z}
+    assert blender == {("", "Combined"): rgba, ("", "full"): rgba, ("", "bg"): rgba, ("", "fg"): rgba,
+                       ("", "depth"): z, ("", "full_depth"): z, ("", "bg_depth"): z, ("", "fg_depth"): z}
+    rgba_of = lambda p: np.stack([ch[f"{p}.{c}"] for c in "RGBA"], -1).astype(np.float64)  # noqa: E731
+    fg, back, whole = rgba_of("fg"), rgba_of("bg"), rgba_of("full")
+    assert back[..., 3].max() < 0.99 and fg[..., 3].max() > 0.5  # partly transparent background; an object
+    over = fg + (1 - fg[..., 3:]) * back  # Porter-Duff over, premultiplied (oiiotool --over, Alpha Over)
+    assert np.abs(over - whole)[..., :3].max() <= IDENTITY_TOL + 1e-6
+    clear = 1 - back[..., 3]
+    a_alpha = (whole[..., 3] - back[..., 3]) / clear
+    a_min = minimum_matte(whole[..., :3], back[..., :3])
+    both = a_min <= a_alpha + IDENTITY_TOL / clear + 1e-5
+    assert both.mean() > 0.9 and np.abs(over - whole)[..., 3][both].max() <= IDENTITY_TOL + 1e-5
+    np.testing.assert_allclose((over - whole)[..., 3][~both], ((a_min - a_alpha) * clear)[~both], atol=1e-4)
 
 
 def test_layers_are_linear_light():
@@ -77,7 +126,7 @@ def test_exr_header_names_the_camera(tmp_path):
     np.testing.assert_allclose(hom[:, 1] / hom[:, 3], v / cam.height, atol=1e-5)
     local = np.column_stack([points, np.ones(2)]) @ header["worldToCamera"].astype(np.float64)
     assert np.all(local[:, 2] > 0)  # +z is the viewing direction
-    assert set(read_exr(exr)) >= {"R", "G", "B", "A", "depth.Z", "fg.A", "full.Z"}
+    assert set(read_exr(exr)) >= {"R", "G", "B", "A", "depth.Z", "fg.A", "full_depth.Z"}
     for layer in ("composite", "full", "bg", "fg", "depth", "sheet"):
         assert os.path.isfile(tmp_path / f"v_{layer}.png")
 

@@ -88,7 +88,7 @@ def test_render_script(tmp_path):
                           "--width", "10", "--height", "8", "--spp", "2"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     back = read_exr(out / "view000.exr")
-    assert back["R"].shape == (8, 10) and "fg.Z" in back and "depth.Z" in back
+    assert back["R"].shape == (8, 10) and "fg_depth.Z" in back and "depth.Z" in back
     assert os.path.isfile(out / "view000_composite.png")
     bad = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "render.py"), str(tmp_path / "nope.xml"),
                           "--out", str(out)], capture_output=True, text=True)

@@ -1,7 +1,8 @@
 """Layered OpenEXR files: the main image as R, G, B, A and named layers beside it.
 
-Channel names follow the convention Nuke and Blender read: ``R, G, B, A`` (premultiplied) for the
-main image, ``<layer>.R/G/B/A`` for the others, ``depth.Z`` and ``<layer>.Z`` for depths.
+Channel names follow the convention Nuke and Blender read (a pass is the name before the last dot):
+``R, G, B, A`` (premultiplied) for the main image, ``<layer>.R/G/B/A`` for the others, ``depth.Z`` and
+``<layer>_depth.Z`` for depths, each its own pass (:mod:`mi_voldis.compositing`).
 """
 import os
 
