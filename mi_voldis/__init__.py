@@ -47,9 +47,19 @@ def _register_plugins():
             importlib.reload(module)
 
 
+def check_device(name):
+    """Raise ``ValueError`` when variant ``name`` needs a backend this machine lacks (a CUDA variant
+    without an NVIDIA GPU and driver; Mitsuba would raise an ImportError about an uninitialised backend)."""
+    import drjit as dr
+    if name.startswith("cuda_") and not dr.has_backend(dr.JitBackend.CUDA):
+        raise ValueError(f"variant '{name}' (--variant or $MI_VOLDIS_VARIANT): no CUDA device or driver found "
+                         f"on this machine; use llvm_ad_rgb")
+
+
 def set_variant(name):
     """Activate Mitsuba variant ``name`` and register the mi-voldis plugins for it."""
     check_variant(name)
+    check_device(name)
     mi.set_variant(name)
     _register_plugins()
 

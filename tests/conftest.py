@@ -11,6 +11,12 @@ TINY_FIT = ["steps_full=60", "steps_bg=12", "lr_warmup=2", "lr_density=0.3", "re
             "preview_views=1"]
 
 
+def pytest_report_header(config):
+    """The variant the suite runs on (``$MI_VOLDIS_VARIANT``, else llvm_ad_rgb) heads pytest's report."""
+    import mitsuba as mi
+    return f"mi_voldis variant: {mi.variant()}"
+
+
 @pytest.fixture(scope="session")
 def tiny_dataset(tmp_path_factory):
     """The bundled tabletop scene rendered small (9 views, 32 x 24, 4 spp)."""

@@ -1,4 +1,6 @@
 """The radiance_field plugin: interpolation, activations, spherical harmonics, traversal."""
+import os
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -88,6 +90,31 @@ def test_variant_checks():
         mi_voldis.check_variant("llvm_ad_spectral")
     mi_voldis.set_variant(mi.variant())  # re-registration keeps the plugins loadable
     assert load(np.zeros((2, 2, 2, 1)), np.zeros((2, 2, 2, 3))).shape == (2, 2, 2)
+
+
+no_cuda = pytest.mark.skipif(dr.has_backend(dr.JitBackend.CUDA), reason="this machine has a CUDA device")
+
+
+@no_cuda
+def test_cuda_variant_without_a_device_is_one_clear_error():
+    with pytest.raises(ValueError, match="'cuda_ad_rgb'.*no CUDA device or driver found"):
+        mi_voldis.set_variant("cuda_ad_rgb")
+    assert mi.variant() != "cuda_ad_rgb"
+
+
+@no_cuda
+@pytest.mark.parametrize("script", [["bench.py", "--step-profile"], ["train.py", "data", "--out", "run"],
+                                    ["demo.py"]])
+def test_scripts_with_cuda_variant_and_no_device_say_so_in_one_line(script, tmp_path):
+    import subprocess
+    import sys
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    done = subprocess.run([sys.executable, os.path.join(root, "scripts", script[0]), *script[1:], "--variant",
+                           "cuda_ad_rgb"], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1
+    assert done.stderr.splitlines() == ["error: variant 'cuda_ad_rgb' (--variant or $MI_VOLDIS_VARIANT): no CUDA "
+                                        "device or driver found on this machine; use llvm_ad_rgb"]
+    assert not os.listdir(tmp_path)
 
 
 def test_pack_interleaves_channels_and_its_adjoint_gathers_them_back():

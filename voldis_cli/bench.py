@@ -17,6 +17,8 @@ import argparse
 import os
 import sys
 
+from .boundary import run
+
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -76,4 +78,4 @@ def main(argv=None):
 
 def entry():
     """The console command (``[project.scripts]`` in pyproject.toml)."""
-    sys.exit(main())
+    sys.exit(run(main))

@@ -11,6 +11,8 @@ import json
 import os
 import sys
 
+from .boundary import run
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -44,4 +46,4 @@ def main(argv=None):
 
 def entry():
     """The console command (``[project.scripts]`` in pyproject.toml)."""
-    main()
+    sys.exit(run(main))

@@ -57,7 +57,11 @@ def section_scenes(section, scenes=None):
 
 def child(args, log_file=None):
     """Run a child Python process; returns its wall-clock seconds. Raises on failure. (Children report
-    their own peak memory in metrics.json: ``ru_maxrss`` of a forked child includes the parent's.)"""
+    their own peak memory in metrics.json: ``ru_maxrss`` of a forked child includes the parent's.) A
+    script runs on this process's variant (its ``--variant`` would otherwise default to llvm_ad_rgb)."""
+    import mitsuba as mi
+    if args[0].endswith(".py"):
+        args = args + ["--variant", mi.variant()]
     t = time.perf_counter()
     with open(log_file or os.devnull, "w") as log:
         status = subprocess.run([sys.executable] + args, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT).returncode
