@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# The test suite and the benchmark's CUDA rows on a GPU machine, in one command that prints each
+# command before it runs it and, at the end, what ran and how it ended.
+#
+#   scripts/gpu_check.sh [OUT]     # OUT: logs and reports (default: $OUT, else out/gpu_check)
+#
+# Steps (each one's output also in OUT/<step>.log; the exit status is the number of failed steps):
+#   env      Python, Mitsuba / Dr.Jit versions, the GPU (nvidia-smi), OpenCV with or without contrib
+#   tests    MI_VOLDIS_VARIANT=cuda_ad_rgb python -m pytest -q -rfEs tests   (pytest's header names the variant)
+#   profile  python scripts/bench.py --step-profile --variant cuda_ad_rgb      (OUT/step_profile.json)
+#   quick    python scripts/bench.py --quick --variant cuda_ad_rgb --report OUT/report  (runs and datasets
+#            in $TMPDIR, not in OUT; the checkout's reports/ stays as it is)
+#
+# On the GPU machine the device tool lends (Python 3.12, no package registry), a bundle made here by
+# ../shared/tools/gpu_bundle.sh (.gpu/site312.tar.xz, carried with the checkout: carry [".gpu"]) is
+# unpacked to $TMPDIR/site and put on PYTHONPATH first. Knobs: PYTHON (default .venv/bin/python where
+# present, else python3), GPU_BUNDLE (default .gpu/site312.tar.xz), GPU_CHECK_VARIANT (default
+# cuda_ad_rgb), GPU_CHECK_STEPS (default "env tests profile quick"), GPU_CHECK_TESTS (pytest's
+# arguments, default "tests").
+set -uo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+DEST=${1:-${OUT:-out/gpu_check}}
+mkdir -p "$DEST"
+DEST=$(cd "$DEST" && pwd)
+TMP=${TMPDIR:-/tmp}
+VARIANT=${GPU_CHECK_VARIANT:-cuda_ad_rgb}
+STEPS=${GPU_CHECK_STEPS:-env tests profile quick}
+read -r -a TESTS <<< "${GPU_CHECK_TESTS:-tests}"
+if [ -z "${PYTHON:-}" ]; then
+    if [ -x .venv/bin/python ]; then PYTHON=.venv/bin/python; else PYTHON=python3; fi
+fi
+BUNDLE=${GPU_BUNDLE:-.gpu/site312.tar.xz}
+
+say() { printf '%s\n' "$*" | tee -a "$DEST/commands.txt"; }
+: > "$DEST/commands.txt"
+if [ -f "$BUNDLE" ]; then
+    say "+ unpack $BUNDLE into $TMP/site (PYTHONPATH)"
+    "$PYTHON" -c "import sys, tarfile; tarfile.open(sys.argv[1]).extractall(sys.argv[2])" "$BUNDLE" "$TMP/site" || exit 1
+    export PYTHONPATH="$TMP/site:$ROOT${PYTHONPATH:+:$PYTHONPATH}"
+else
+    export PYTHONPATH="$ROOT${PYTHONPATH:+:$PYTHONPATH}"
+fi
+export MI_VOLDIS_VARIANT=$VARIANT PYTHONUNBUFFERED=1
+
+SUMMARY=()
+FAILED=0
+step() {  # step NAME COMMAND...: print the command, run it (output to the terminal and OUT/NAME.log)
+    local name=$1
+    shift
+    case " $STEPS " in *" $name "*) ;; *) return 0 ;; esac
+    say "+ [$name] MI_VOLDIS_VARIANT=$MI_VOLDIS_VARIANT $*"
+    local t0=$SECONDS
+    "$@" 2>&1 | tee "$DEST/$name.log"
+    local rc=${PIPESTATUS[0]}
+    SUMMARY+=("$name: exit $rc in $((SECONDS - t0)) s: $*")
+    [ "$rc" -eq 0 ] || FAILED=$((FAILED + 1))
+}
+
+env_info() {  # the versions, the GPU, and whether OpenCV has its contrib modules
+    "$PYTHON" -c 'import platform, mitsuba as mi, drjit as dr, cv2
+print("python", platform.python_version(), "mitsuba", mi.__version__, "drjit", dr.__version__, "opencv",
+      cv2.__version__, "with contrib" if hasattr(cv2, "xphoto") else "without contrib", "cuda backend",
+      bool(dr.has_backend(dr.JitBackend.CUDA)))' || return 1
+    nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv || echo "nvidia-smi: none"
+}
+step env env_info
+step tests "$PYTHON" -m pytest -q -rfEs -p no:cacheprovider "${TESTS[@]}"
+step profile bash -o pipefail -c "\"$PYTHON\" scripts/bench.py --step-profile --variant $VARIANT | tee \"$DEST/step_profile.json\""
+step quick "$PYTHON" scripts/bench.py --quick --variant "$VARIANT" --work "$TMP/gpu_check_bench" --report "$DEST/report"
+
+say ""
+say "gpu_check: $VARIANT, outputs in $DEST"
+for line in "${SUMMARY[@]}"; do say "  $line"; done
+exit "$FAILED"
