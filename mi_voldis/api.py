@@ -7,7 +7,7 @@
 
 Layers are those written to EXR (:mod:`mi_voldis.compositing`): premultiplied RGBA in linear light
 (``linear=False``: sRGB-encoded, for display), ``fg`` the object such that full = fg over bg, and the
-depth (distance along the ray, world units).
+depth (distance along the ray, world units). Wrong arguments raise ``ValueError`` naming the argument.
 """
 import json
 import os
@@ -24,6 +24,11 @@ LAYERS = ("composite", "full", "bg", "fg")
 
 
 def _render(integrator, camera, layers, linear):
+    if isinstance(layers, str):
+        layers = (layers,)
+    unknown = [layer for layer in layers if layer not in LAYERS]
+    if unknown:
+        raise ValueError(f"layers: unknown layer {unknown[0]!r} (expected some of {', '.join(LAYERS)})")
     raw = render_camera(integrator, camera, tuple(dict.fromkeys(("composite", "full", "bg", "fg") + tuple(layers))))
     ch = composite_channels(layer_channels(raw))
     out = {}
@@ -40,14 +45,22 @@ class _Renders:
     def _camera(self, camera, view):
         if camera is not None:
             if not isinstance(camera, Camera):
-                raise TypeError("camera must be a mi_voldis.cameras.Camera (or give view=INDEX)")
+                raise ValueError(f"camera: must be a mi_voldis.cameras.Camera (or give view=INDEX), got "
+                                 f"{type(camera).__name__}")
             return camera
         ds = self.dataset
-        return ds.cameras[int(ds.test[0] if view is None and len(ds.test) else ds.train[0] if view is None else view)]
+        if view is None:
+            return ds.cameras[int(ds.test[0] if len(ds.test) else ds.train[0])]
+        if isinstance(view, bool) or not isinstance(view, (int, np.integer)):
+            raise ValueError(f"view: must be a view index (a whole number), got {view!r}")
+        if not -len(ds.cameras) <= view < len(ds.cameras):
+            raise ValueError(f"view: {view} is out of range (the dataset has {len(ds.cameras)} views)")
+        return ds.cameras[int(view)]
 
     def render(self, camera=None, view=None, layers=LAYERS, linear=True):
         """{layer: (H, W, 4) premultiplied RGBA, "depth": (H, W)} from ``camera`` (a
-        :class:`~mi_voldis.cameras.Camera`) or the dataset's view ``view`` (default: the first test view)."""
+        :class:`~mi_voldis.cameras.Camera`) or the dataset's view ``view`` (an index; default: the first
+        test view). ``layers``: some of :data:`LAYERS` (or one of them)."""
         return _render(self.integrator(), self._camera(camera, view), layers, linear)
 
 
@@ -69,9 +82,18 @@ class Run(_Renders):
     def edit(self, task, settings=None, out=None, progress=False):
         """Run ``task`` ('removal', 'transform', 'camouflage', 'nonneg', 'semantic') with ``settings``
         (its settings class from :mod:`mi_voldis.tasks.settings`, or a dict of values; NumPy arrays are
-        accepted, e.g. a transform's 4x4 ``matrix``) into ``out`` (default RUN/<task>); returns the
-        :class:`Edit`."""
-        from .tasks import run_task
+        accepted, e.g. a transform's 4x4 ``matrix``) into ``out``; returns the :class:`Edit`. By default
+        ``out`` is RUN/<task>, or RUN/<task>_2, _3, ... where that exists: an edit never replaces an
+        earlier one unless ``out`` names it. ``out`` may not be, hold or lie inside the run's files or
+        its dataset."""
+        from .tasks import SETTINGS, run_task
+        if task not in SETTINGS:
+            raise ValueError(f"task: unknown task {task!r} (expected one of {', '.join(SETTINGS)})")
+        if settings is not None and not isinstance(settings, (dict, SETTINGS[task])):
+            raise ValueError(f"settings: must be a dict of {task} settings or a {SETTINGS[task].__name__}, got "
+                             f"{type(settings).__name__}")
+        if out is None:
+            out = free_folder(os.path.join(self.path, task))
         if isinstance(settings, dict):
             settings = {k: np.asarray(v).tolist() if isinstance(v, np.ndarray) else v for k, v in settings.items()}
         folder = run_task(self.path, task, settings, progress=progress, out=out)
@@ -91,6 +113,15 @@ class Edit(_Renders):
         if self._integrator is None:
             self._integrator = load_scene(os.path.join(self.path, "scene.xml")).integrator()
         return self._integrator
+
+
+def free_folder(path):
+    """``path``, or ``path_2``, ``path_3``, ... the first that neither exists nor is staged."""
+    k, candidate = 1, path
+    while os.path.lexists(candidate) or os.path.lexists(candidate + ".partial"):
+        k += 1
+        candidate = f"{path}_{k}"
+    return candidate
 
 
 def load_run(path, dataset=None):

@@ -15,6 +15,7 @@ from .data import load_dataset
 from .fit.config import FitConfig
 from .fit.run import run_fit
 from .io.images import contact_sheet, display_to_uint8, write_png
+from .io.run_folder import staging
 from .synth.make import make_dataset
 from .tasks import run_task
 
@@ -33,7 +34,9 @@ def run_demo(out, scene, spp=128, progress=True, composition=None):
         make_dataset(scene, data, spp=spp, progress=progress)
     timings["dataset"] = time.perf_counter() - t
     t = time.perf_counter()
-    fit = run_fit(data, run, FitConfig(), progress=progress)
+    # a demo killed during its fit continues it (the staged job's dataset and settings are checked)
+    resumable = os.path.isfile(os.path.join(staging(run), "checkpoints", "last.npz"))
+    fit = run_fit(data, run, FitConfig(), resume=resumable, progress=progress)
     timings["fit"] = time.perf_counter() - t
     results = {}
     for task, options in EDITS:

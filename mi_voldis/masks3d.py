@@ -151,21 +151,40 @@ def surface_masks(cameras, surf, given, tol=0.05):
     return out
 
 
+MASK_FOLDERS = ("masks", "effects")  # the folders of a dataset make_masks may replace (the loaders read them)
+
+
+def mask_inputs(dataset, run_dir, given):
+    """What the masks' folder must stay apart from: the dataset's files but its mask folders
+    (:func:`~mi_voldis.io.run_folder.dataset_inputs`: ``DATASET/masks`` may be replaced,
+    ``DATASET/images`` or the dataset itself not), the run and the given mask files."""
+    from .io.run_folder import dataset_inputs
+    return dataset_inputs(dataset, MASK_FOLDERS) + [(run_dir, "run")] + [(p, "given mask") for p in
+                                                                         (given or {}).values()]
+
+
 def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=None, cfg=None, progress=True,
-               effects=False):
+               effects=False, resume=False, restart=False):
     """Write an object mask for every view of the dataset at ``dataset`` into the folder ``out``
     (``<image stem>.png``, white = object: what the loaders read from ``DATASET/masks/``), from
     ``given`` {view name: mask file} or a world ``box`` (lo, hi), through the full field of the run
     ``run_dir`` (fitted there first when it does not exist yet); with ``effects``, the given masks are
     effect masks (the object's shadow) and so are those written (:func:`surface_masks`; the loaders read
     them from ``DATASET/effects/``). Returns a summary; with ground-truth coverage in the dataset, the
-    object masks' IoU against it."""
+    object masks' IoU against it. ``resume`` / ``restart``: of the fit into ``run_dir``. Checked before
+    any work: ``out`` apart from the dataset's files (a folder of masks inside it is what the loaders
+    read), the run and the given masks; the run apart from the dataset."""
     from .data import load_dataset
     from .data.images import read_mask
     from .fit.run import run_fit
     from .io.images import write_png
-    from .io.run_folder import staged
+    from .io.run_folder import check_output, dataset_inputs, staged
     from .tasks.base import FittedRun
+    fitted = os.path.isfile(os.path.join(run_dir, "scene.xml"))
+    if not fitted:
+        check_output(run_dir, dataset_inputs(dataset), resume, restart, program="train")
+    inputs = mask_inputs(dataset, run_dir, given)
+    check_output(out, inputs, program="make_masks")
     ds = load_dataset(dataset, fmt, holdout=0, factor=factor)
     masks = {}
     for key, path in (given or {}).items():
@@ -176,8 +195,8 @@ def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=N
                              f"{ds.size[1]}x{ds.size[0]}")
         if not masks[v].any():
             raise ValueError(f"{path}: the mask is empty")
-    if not os.path.isfile(os.path.join(run_dir, "scene.xml")):
-        run_fit(dataset, run_dir, cfg, progress=progress, fmt=fmt, factor=factor)
+    if not fitted:
+        run_fit(dataset, run_dir, cfg, resume, progress, fmt, factor=factor, restart=restart)
     integrator = FittedRun(run_dir, dataset).integrator()
     surf = surfaces(integrator, ds.cameras)
     if box is not None:
@@ -186,7 +205,7 @@ def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=N
         result = surface_masks(ds.cameras, surf, masks)
     else:
         result = view_masks(ds.cameras, surf, masks, images=ds.images)
-    with staged(out) as stage:
+    with staged(out, inputs=inputs, made_by="make_masks") as stage:
         for name, m in zip(ds.names, result):
             write_png(os.path.join(stage, os.path.splitext(name)[0] + ".png"), np.where(m, 255, 0).astype(np.uint8))
     summary = {"masks": out, "views": len(result), "object_share": float(np.mean([m.mean() for m in result])),

@@ -16,6 +16,7 @@ import pytest
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCRIPTS = os.path.join(ROOT, "scripts")
 from voldis_cli import boundary as _boundary  # noqa: E402
+from mi_voldis.io.run_folder import write_marker  # noqa: E402
 
 
 def script(name):
@@ -44,6 +45,10 @@ def world(tiny_dataset, tiny_run, tmp_path_factory):
     existing = base / "existing"
     existing.mkdir()
     (existing / "keep.txt").write_text("an earlier result")
+    write_marker(str(existing), "train")  # an earlier job's output: replaceable, so the case's own error shows
+    for name in PROGRAMS:  # the same for each program: a job replaces only what the same program wrote
+        shutil.copytree(existing, base / f"existing_{name}")
+        write_marker(str(base / f"existing_{name}"), name)
     (base / "a_file").write_text("not a folder")
     (base / "list.json").write_text("[1, 2]")
     (base / "broken.json").write_text('{"steps_full": ')
@@ -98,6 +103,7 @@ def _p(world, text):
 
 
 T, OPT, R, M, E = "train", "optimize", "render", "make_dataset", "export_vol"
+PROGRAMS = (T, OPT, R, M, E)
 SCENE = "scenes/tabletop.xml"
 CASES = [
     # (script, arguments, exit code, text the one line must contain)
@@ -171,6 +177,7 @@ CASES = [
 
 @pytest.mark.parametrize("name,args,code,message", CASES, ids=[f"{c[0]}-{k}" for k, c in enumerate(CASES)])
 def test_bad_input_is_one_line_and_leaves_outputs_alone(world, capsys, name, args, code, message):
+    world = {**world, "existing": os.path.join(world["base"], f"existing_{name}")}
     args = [_p(world, a) for a in args]
     watched = [world["existing"], world["run"]] + [os.path.join(world["base"], n) for n in
                                                    ("no_config", "bad_grid", "bad_xml", "nan_grid")]
@@ -228,3 +235,188 @@ def test_unusual_but_legal_datasets_fit_to_the_end(world, tmp_path, dataset, hol
     tests = {"notest": 0, "onetrain": 2}[dataset]
     assert metrics["views"]["test"] == tests and metrics["views"]["train"] >= 1
     assert (metrics["held_out"] == {}) == (tests == 0)
+
+
+# --- Nothing a user has is lost: outputs that are, hold or lie inside an input, folders no job made,
+# resumable stages, a second job on the same output. Each case is refused in one line before anything is
+# written, and every input and bystander file is byte-identical afterwards.
+
+@pytest.fixture(scope="module")
+def inputs(world, tiny_dataset, tiny_run, tmp_path_factory):
+    """A dataset copy inside a parent folder, a scene folder, a run copy with a task folder, masks."""
+    from mi_voldis.tasks import run_task
+    base = tmp_path_factory.mktemp("loss")
+    parent = base / "parent"
+    shutil.copytree(tiny_dataset, parent / "ds")
+    scenes = base / "scenes"
+    shutil.copytree(os.path.join(ROOT, "scenes"), scenes)
+    run = base / "run"
+    shutil.copytree(tiny_run, run)
+    run_task(str(run), "transform", {"scale": 1.0}, progress=False)
+    mask = base / "given.png"
+    shutil.copy(os.path.join(tiny_dataset, "masks", sorted(os.listdir(os.path.join(tiny_dataset, "masks")))[0]), mask)
+    return {"ds": str(parent / "ds"), "parent": str(parent), "scenes": str(scenes), "run": str(run),
+            "mask": str(mask), "base": str(base)}
+
+
+def _refused(name, args, message, trees, capsys):
+    """Run script ``name``: exit 1 with one line holding ``message``, and ``trees`` unchanged."""
+    before = {t: tree_digest(t) for t in trees}
+    got = _boundary.run(script(name).main, args)
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert got == 1 and len(lines) == 1 and lines[0].startswith("error: "), err
+    assert message in err, err
+    assert {t: tree_digest(t) for t in trees} == before
+    return err
+
+
+LOSS_CASES = [  # (script, arguments, the line must contain); {ds} {parent} {scenes} {run} {mask} {dataset} (the
+    # run's own) substituted
+    ("train", ["{ds}", "--out", "{ds}"], "{ds}: is the dataset {ds}"),
+    ("train", ["{ds}", "--out", "{parent}"], "{parent}: holds the dataset {ds}"),
+    ("train", ["{ds}", "--out", "{ds}/images"], "{ds}/images: is the dataset's file {ds}/images"),
+    ("make_dataset", ["{scenes}/tabletop.xml", "--out", "{scenes}"], "{scenes}: holds the scene file"),
+    ("make_masks", ["{ds}", "--out", "{ds}", "--run", "{run}", "--box", "0,0,0,1,1,1"], "{ds}: is the dataset"),
+    ("make_masks", ["{ds}", "--out", "{ds}/images", "--run", "{run}", "--box", "0,0,0,1,1,1"],
+     "{ds}/images: is the dataset's file {ds}/images"),
+    ("make_masks", ["{ds}", "--out", "{ds}/masks2", "--run", "{ds}", "--from-views", "0={mask}"],
+     "{ds}: is the dataset {ds}"),
+    ("make_masks", ["{ds}", "--out", "{base}/m", "--run", "{run}", "--from-views", "0={mask}", "1={base}"], "{base}"),
+    ("optimize", ["{run}", "--task", "transform", "--scale", "1", "--out", "{run}"], "{run}: holds the run's file"),
+    ("optimize", ["{run}", "--task", "transform", "--scale", "1", "--out", "{dataset}"], "{dataset}: is the dataset"),
+    ("optimize", ["{run}", "--task", "transform", "--scale", "1", "--out", "{ds}"],
+     "{ds}: holds the output of make_dataset, not of optimize, so it is not replaced"),
+    ("evaluate", ["{run}", "--out", "{run}/config.json"], "{run}/config.json: is the run's file"),
+    ("evaluate", ["{run}", "--out", "{dataset}/transforms.json"], "{dataset}/transforms.json: is the dataset's file"),
+    ("evaluate", ["{run}", "--out", "{mask}"], "{mask}: exists and is not a score file of scripts/evaluate.py"),
+    ("render", ["{run}/transform/scene.xml", "--out", "{run}/transform"], "{run}/transform: holds the scene's file"),
+    ("render", ["{run}/transform/scene.xml", "--out", "{run}"], "{run}: holds the scene's file"),
+    ("render", ["{run}/scene.xml", "--out", "{run}/full_grid.npz/x"], "{run}/full_grid.npz/x: lies inside"),
+    ("export_vol", ["{run}/transform/scene.xml", "--out", "{run}"], "{run}: holds the scene's file"),
+]
+
+
+@pytest.mark.parametrize("name,args,message", LOSS_CASES, ids=[f"{c[0]}-{k}" for k, c in enumerate(LOSS_CASES)])
+def test_an_output_over_an_input_is_refused_and_nothing_changes(inputs, tiny_dataset, capsys, name, args, message):
+    if name == "make_masks" and "1={base}" in args:  # a given mask that is a folder: not a mask file
+        message = f"{inputs['base']}: no such mask file"
+    fill = {**inputs, "dataset": tiny_dataset}
+    _refused(name, [a.format(**fill) for a in args], message.format(**fill), [inputs["base"], tiny_dataset], capsys)
+    assert not [p for p in os.listdir(inputs["base"]) + os.listdir(inputs["run"])
+                if p.endswith((".partial", ".lock", ".old"))]
+
+
+def test_edit_into_its_own_run_is_refused_and_a_default_edit_never_replaces_an_earlier_one(inputs):
+    import mi_voldis
+    run = mi_voldis.load_run(inputs["run"])
+    before = tree_digest(inputs["run"])
+    with pytest.raises(ValueError, match=f"{inputs['run']}: holds the run's file"):
+        run.edit("transform", {"scale": 1.0}, out=inputs["run"])
+    assert tree_digest(inputs["run"]) == before
+    moved = run.edit("transform", {"translate": [0.01, 0, 0]})
+    try:
+        assert moved.path == os.path.join(inputs["run"], "transform_2")  # RUN/transform was there already
+        assert tree_digest(os.path.join(inputs["run"], "transform")) == {
+            k[len("transform/"):]: v for k, v in before.items() if k.startswith("transform/")}
+    finally:
+        shutil.rmtree(moved.path)
+
+
+@pytest.mark.parametrize("bad,message", [
+    ("", "the output folder must be a path, got ''"), (".", ".: names the current folder"),
+    ("..", "..: names the current folder")])
+def test_an_output_naming_no_folder_is_refused_up_front(world, capsys, bad, message):
+    _refused("train", [world["dataset"], "--out", bad], message, [world["base"]], capsys)
+
+
+def test_folders_no_job_made_are_never_removed(world, tmp_path, capsys):
+    """A user's OUT, OUT.old or OUT.partial (no marker) is neither replaced nor removed; a symbolic link
+    as --out is refused, not replaced."""
+    for name in ("mine", "mine.old", "mine.partial"):
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / "notes.txt").write_text(name)
+    verbs = {"mine": "replaced", "mine.old": "removed", "mine.partial": "removed"}
+    for name in ("mine", "mine.old", "mine.partial"):
+        out = str(tmp_path / ("mine" if name == "mine" else "other"))
+        if name != "mine":
+            os.rename(tmp_path / name, tmp_path / name.replace("mine", "other"))
+            name = name.replace("mine", "other")
+        _refused("train", [world["dataset"], "--out", out], f"{tmp_path / name}: exists and was not written by "
+                 f"mi-voldis (no .mi-voldis in it), so it is not {verbs[name.replace('other', 'mine')]}",
+                 [str(tmp_path), world["dataset"]], capsys)
+    os.symlink(world["existing"], tmp_path / "link")
+    _refused("render", [os.path.join(world["run"], "scene.xml"), "--out", str(tmp_path / "link")],
+             f"{tmp_path / 'link'}: is a symbolic link (to {world['existing']})", [str(tmp_path), world["base"]],
+             capsys)
+    assert os.path.islink(tmp_path / "link")
+
+
+@pytest.fixture
+def fake_fit(monkeypatch):
+    """run_fit's fit replaced by one that leaves a checkpoint and fails, as a killed fit does."""
+    import mi_voldis.fit.run as fit_run
+
+    def killed(dataset, checkpoint, cfg, resume=False, progress=True):
+        os.makedirs(os.path.dirname(checkpoint), exist_ok=True)
+        np_save = __import__("numpy").savez
+        np_save(checkpoint, step=__import__("numpy").array(5))
+        raise KeyboardInterrupt
+    monkeypatch.setattr(fit_run, "fit", killed)
+
+
+def test_a_resumable_stage_is_kept_until_resume_or_restart(world, tmp_path, fake_fit, capsys):
+    data = str(tmp_path / "data")
+    shutil.copytree(world["dataset"], data)
+    out = str(tmp_path / "run")
+    assert _boundary.run(script("train").main, [data, "--out", out, "--set", "steps_full=60"]) == 130
+    capsys.readouterr()
+    stage = out + ".partial"
+    assert os.path.isfile(os.path.join(stage, "checkpoints", "last.npz"))
+    kept = [str(tmp_path)]
+    # a new fit without --resume, even one whose dataset then fails to load, keeps the checkpoint
+    _refused("train", [data, "--out", out], f"{stage}: holds the checkpoint of an unfinished job: --resume "
+             "continues it, --restart discards it", kept, capsys)
+    _refused("train", [str(tmp_path / "nowhere"), "--out", out], f"{stage}: holds the checkpoint", kept, capsys)
+    # --resume of another job: other settings, then a changed dataset file, named
+    _refused("train", [data, "--out", out, "--resume", "--set", "steps_full=61"],
+             f"{stage}: --resume of another job than the one staged (settings.steps_full: 60 -> 61)", kept, capsys)
+    image = os.path.join(data, "images", sorted(os.listdir(os.path.join(data, "images")))[0])
+    os.utime(image, ns=(0, 0))
+    _refused("train", [data, "--out", out, "--resume", "--set", "steps_full=60"],
+             f"dataset_files.images/{os.path.basename(image)}: [", kept, capsys)
+    _refused("train", [data, "--out", out, "--resume", "--restart"], "--resume and --restart exclude each other",
+             kept, capsys)
+    # settings that may change do; --restart discards the stage (the fake fit then leaves a new one)
+    assert _boundary.run(script("train").main, [data, "--out", out, "--restart", "--set", "steps_full=60"]) == 130
+    with open(os.path.join(stage, ".mi-voldis")) as f:
+        assert json.load(f)["job"]["dataset_files"][f"images/{os.path.basename(image)}"][1] == 0
+    assert _boundary.run(script("train").main, [data, "--out", out, "--resume", "--set", "steps_full=60",
+                                                "--set", "checkpoint_every=7"]) == 130
+
+
+def test_a_second_job_on_the_same_output_is_refused(tmp_path):
+    """OUT.lock holds the pid of the job writing OUT: a live one refuses a second job, a dead one's is
+    taken over, and the lock goes when the job ends."""
+    from mi_voldis.io.run_folder import staged
+    out = str(tmp_path / "out")
+    with staged(out, made_by="test"):
+        with pytest.raises(ValueError, match=f"{out}: another job \\(pid {os.getpid()}\\) is writing it"):
+            with staged(out, made_by="test"):
+                pass
+    assert not os.path.exists(out + ".lock") and os.path.isdir(out)
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    with open(out + ".lock", "w") as f:
+        f.write(f"{dead.pid}\n")
+    with staged(out, made_by="test") as stage:
+        with open(out + ".lock") as f:
+            assert int(f.read()) == os.getpid()
+        open(os.path.join(stage, "x"), "w").close()
+    assert os.path.isfile(os.path.join(out, "x")) and not os.path.exists(out + ".lock")
+    with open(out + ".lock", "w") as f:
+        f.write("not a pid")
+    with pytest.raises(ValueError, match="holds no process id"):
+        with staged(out, made_by="test"):
+            pass

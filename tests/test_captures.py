@@ -316,7 +316,7 @@ def test_make_dataset_writes_the_spinnerf_layout(tmp_path):
     out = str(tmp_path / "spin")
     make_dataset(os.path.join(root, "scenes", "tabletop.xml"), out, views=10, resolution=(32, 24), spp=2,
                  progress=False, layout="spinnerf")
-    assert sorted(os.listdir(out)) == ["images_4", "poses_bounds.npy"]
+    assert sorted(os.listdir(out)) == [".mi-voldis", "images_4", "poses_bounds.npy"]  # the marker: make_dataset's
     ds = load_dataset(out)
     assert list(ds.test) == [0, 1, 2, 3] and len(ds.train) == 6
     np.testing.assert_array_equal(ds.backgrounds[ds.test], ds.images[ds.test])

@@ -136,6 +136,8 @@ def test_task_resumes_after_kill(tiny_run, tmp_path):
 
     from conftest import ROOT
     from helpers import kill_after_checkpoint
+
+    from mi_voldis.io.run_folder import write_marker
     runs = {name: tmp_path / name for name in ("ref", "killed")}
     for path in runs.values():
         shutil.copytree(tiny_run, path, ignore=shutil.ignore_patterns("camouflage*"))
@@ -144,6 +146,7 @@ def test_task_resumes_after_kill(tiny_run, tmp_path):
     subprocess.run(args + [str(runs["ref"])], check=True, capture_output=True)
     os.makedirs(runs["killed"] / "camouflage")
     (runs["killed"] / "camouflage" / "keep.txt").write_text("an earlier result")
+    write_marker(str(runs["killed"] / "camouflage"), "optimize")  # an earlier task's output: replaced when done
     proc = subprocess.Popen(args + [str(runs["killed"])], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     kill_after_checkpoint(proc, runs["killed"] / "camouflage.partial" / "checkpoints" / "last.npz", 10)
     assert (runs["killed"] / "camouflage" / "keep.txt").exists()

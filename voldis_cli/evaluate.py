@@ -7,9 +7,11 @@ DATASET: a SPIn-NeRF folder (images_4/label for training views, images_4/test_la
 views photographed without the object) or a transforms.json dataset with background_path ground truth
 (the bundled and random scenes). Prints (and with --out writes) PSNR / SSIM over the whole image,
 inside the dilated mask and inside the mask's bounding box, per view and their means; LPIPS with a
-local weights folder (see mi_voldis/lpips.py for the files it needs).
+local weights folder (see mi_voldis/lpips.py for the files it needs). --out is refused where it
+names one of the run's or the dataset's files, or an existing file that is not an earlier score file.
 """
 import json
+import os
 import sys
 
 from .boundary import add_debug, check_run, parser_of, run, variant_first
@@ -38,6 +40,8 @@ def main(argv=None):
         from mi_voldis.lpips import load_lpips
         perceptual = load_lpips(args.lpips_weights)
     ds = fitted.dataset
+    if args.out:
+        check_scores_file(args.out, args.run, ds.root)
     scores = evaluate_removal(fitted.integrator(), ds, args.dilate, perceptual)
     if not scores["views"]:
         raise ValueError(f"{ds.root}: no test view has a ground-truth background and an object mask "
@@ -47,6 +51,23 @@ def main(argv=None):
         from mi_voldis.io.run_folder import write_json
         write_json(args.out, scores)
     print(json.dumps({k: v for k, v in scores.items() if k != "per_view" or not args.quiet}, indent=1))
+
+
+def check_scores_file(path, run, dataset):
+    """``--out`` may be a new file or an earlier score file, never an input of the run or the dataset."""
+    from mi_voldis.io.run_folder import check_inputs, dataset_inputs, run_files
+    check_inputs(path, run_files(run) + dataset_inputs(dataset))
+    if os.path.isdir(path):
+        raise ValueError(f"{path}: is a folder; --out names the JSON file to write")
+    if os.path.lexists(path):
+        try:
+            with open(path) as f:
+                earlier = json.load(f)
+        except (OSError, ValueError):
+            earlier = None
+        if not (isinstance(earlier, dict) and {"run", "dataset", "views"} <= set(earlier)):
+            raise ValueError(f"{path}: exists and is not a score file of scripts/evaluate.py, so it is not "
+                             "overwritten; choose another --out")
 
 
 def entry():

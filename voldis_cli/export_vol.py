@@ -7,7 +7,9 @@ Writes DIR/<field>_sigma_t.vol (density per world unit), DIR/<field>_albedo.vol 
 colour) and DIR/<field>_gridvolume.xml (a cube holding a heterogeneous medium over them; see
 mi_voldis/dense_export.py for how contracted and NDC densities are converted). Default region: the
 field's box (world space) or the inner cube of a contracted space; NDC scenes need --region. Default
-resolution: 128 values along the region's longest side, the others in proportion.
+resolution: 128 values along the region's longest side, the others in proportion. DIR is written
+whole (DIR.partial, then swapped in) and replaces an earlier export; it may not be, hold or lie inside
+the scene file or the files it refers to.
 """
 import argparse
 import os
@@ -43,7 +45,11 @@ def main(argv=None):
     import numpy as np
 
     from mi_voldis.dense_export import export_dense, write_export
+    from mi_voldis.io.run_folder import check_output, scene_files, staged
     from mi_voldis.scene import load_scene
+
+    inputs = [(p, "scene's file") for p in scene_files(args.scene)]
+    check_output(args.out, inputs, program="export_vol")
 
     integrator = load_scene(args.scene).integrator()
     fields = integrator.fields
@@ -70,9 +76,10 @@ def main(argv=None):
     else:
         resolution = args.resolution
     sigma, albedo = export_dense(field, space, lo, hi, resolution)
-    path = write_export(args.out, args.field, sigma, albedo, lo, hi, source=os.path.abspath(args.scene))
+    with staged(args.out, inputs=inputs, made_by="export_vol") as stage:
+        path = write_export(stage, args.field, sigma, albedo, lo, hi, source=os.path.abspath(args.scene))
     if not args.quiet:
-        print(path)
+        print(os.path.join(args.out, os.path.relpath(path, stage)))
 
 
 def entry():

@@ -10,7 +10,8 @@ the given masks or box into 3D through the field's surface (mi_voldis/masks3d.py
 unmasked. VIEW: an image name, its stem or its index. The box is in world units (the dataset's poses),
 whatever scene space the fit uses. scripts/train.py then reads DATASET/masks/. With --effects the given
 masks mark the object's shadow (or reflection) on the surfaces: each view's pixels whose surface point some
-given view sees inside its mask, for DATASET/effects/.
+given view sees inside its mask, for DATASET/effects/. OUT may replace a folder of masks that make_masks
+wrote, never the dataset, its images or other files, the run or the given masks.
 """
 import json
 import os
@@ -40,6 +41,8 @@ def main(argv=None):
     ap.add_argument("--effects", action="store_true",
                     help="--from-views masks are effect masks (the object's shadow): a patch of the surfaces")
     ap.add_argument("--run", help="run folder of the full field (fitted there when missing; default OUT.run)")
+    ap.add_argument("--resume", action="store_true", help="continue the fit of --run from its RUN.partial")
+    ap.add_argument("--restart", action="store_true", help="discard a resumable RUN.partial of --run and fit afresh")
     ap.add_argument("--format", default="auto", choices=("auto", "llff", "transforms", "colmap"))
     ap.add_argument("--factor", "--downscale", type=int, metavar="K", help="read images_K/")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="a fit setting")
@@ -64,7 +67,7 @@ def main(argv=None):
     from mi_voldis.masks3d import make_masks
     summary = make_masks(args.dataset, args.run or args.out.rstrip("/") + ".run", args.out, given, box, args.format,
                          args.factor, FitConfig.from_sources(None, args.set), progress=not args.quiet,
-                         effects=args.effects)
+                         effects=args.effects, resume=args.resume, restart=args.restart)
     print(json.dumps(summary, indent=1))
 
 

@@ -42,8 +42,12 @@ def main(argv=None):
     ap.add_argument("--dataset", help="dataset folder (default: the one the run was fitted on)")
     ap.add_argument("--config", help="JSON file of task settings (a finished RUN/<task>/config.json works too)")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one setting")
-    ap.add_argument("--out", help="output folder (default RUN/<task>); its scene refers to RUN's fields in place")
-    ap.add_argument("--resume", action="store_true", help="continue OUT.partial from its checkpoint")
+    ap.add_argument("--out", help="output folder (default RUN/<task>), apart from RUN's files and the dataset; its "
+                                  "scene refers to RUN's fields in place")
+    ap.add_argument("--resume", action="store_true",
+                    help="continue OUT.partial from its checkpoint (same task, settings and run; checkpoint_every "
+                         "may change)")
+    ap.add_argument("--restart", action="store_true", help="discard a resumable OUT.partial and start afresh")
     ap.add_argument("--keep-checkpoints", action="store_true", help="keep OUT/checkpoints/last.npz")
     ap.add_argument("--steps", help="optimisation steps (optimised tasks)")
     ap.add_argument("--checkpoint-every", help="steps between checkpoints")
@@ -86,7 +90,7 @@ def main(argv=None):
     settings = cls.from_sources(args.config, args.set, **values)
     from mi_voldis.tasks import run_task
     out = run_task(args.run, args.task, settings, args.dataset, progress=not args.quiet, out=args.out,
-                   keep_checkpoints=args.keep_checkpoints)
+                   keep_checkpoints=args.keep_checkpoints, restart=args.restart)
     with open(os.path.join(out, "metrics.json")) as f:
         metrics = json.load(f)
     print(json.dumps({"output": out, **{k: v for k, v in metrics.items() if k != "per_view"}}, indent=1))

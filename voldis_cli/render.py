@@ -12,6 +12,9 @@ depth.Z, full.*, bg.*, fg.*; colours in linear light, mi_voldis/compositing.py) 
 DIR/<name>_<layer>.png. With --path: DIR/frame_NNNN.exr and DIR/<layer>.mp4 (needs imageio-ffmpeg:
 pip install .[video]; without it DIR/<layer>.gif). The path is made from the training views of the
 capture the run was fitted on (or --cameras DATASET).
+
+DIR is written whole (DIR.partial, then swapped in) and replaces an earlier render; it may not be,
+hold or lie inside the scene file, the files it refers to or the dataset read.
 """
 import argparse
 import os
@@ -78,17 +81,22 @@ def main(argv=None):
     args = ap.parse_args(argv)
     if (args.width is None) != (args.height is None):
         ap.error("--width and --height go together")
-    if os.path.exists(args.out) and not os.path.isdir(args.out):
-        raise ValueError(f"{args.out}: exists and is not a folder")
 
     os.environ["MI_VOLDIS_VARIANT"] = args.variant  # chosen before the first import of mi_voldis
+    from mi_voldis.io.run_folder import check_output, dataset_inputs, scene_files, staged
+    record = run_record(os.path.dirname(os.path.abspath(args.scene)))
+    inputs = [(p, "scene's file") for p in scene_files(args.scene)]
+    for path in (args.cameras or (record or {}).get("path"),):
+        inputs += dataset_inputs(path) if path else []
+    for path in (args.dataparser_transforms, args.path if args.path and args.path.endswith(".json") else None):
+        inputs += [(path, "input file")] if path else []
+    check_output(args.out, inputs, program="render")
     from mi_voldis.export import render_path, render_scene_files
     from mi_voldis.scene import load_scene
 
     scene = load_scene(args.scene)
     size = (args.width, args.height) if args.width else None
     cameras = None
-    record = run_record(os.path.dirname(os.path.abspath(args.scene)))
     if args.path:
         path_cameras = camera_path(args, record)
         if size:
@@ -98,9 +106,10 @@ def main(argv=None):
         if fps is None:
             from mi_voldis.camera_paths import nerfstudio_fps
             fps = (nerfstudio_fps(args.path) if args.path.endswith(".json") else None) or 24
-        exrs, video = render_path(scene, args.out, path_cameras, args.spp, args.layer, fps)
+        with staged(args.out, inputs=inputs, made_by="render") as stage:
+            exrs, video = render_path(scene, stage, path_cameras, args.spp, args.layer, fps)
         if not args.quiet:
-            print(f"{len(exrs)} frames: {os.path.dirname(exrs[0])}/frame_NNNN.exr\nvideo: {video}")
+            print(f"{len(exrs)} frames: {args.out}/frame_NNNN.exr\nvideo: {final(video, stage, args.out)}")
         return
     if args.cameras:
         from mi_voldis.data import load_dataset
@@ -112,9 +121,15 @@ def main(argv=None):
         cameras = [(os.path.splitext(ds.names[v])[0], ds.cameras[v]) for v in views]
     elif not scene.sensors():
         raise ValueError(f"{args.scene}: the scene has no sensor; give --cameras DATASET")
-    for path in render_scene_files(scene, args.out, spp=args.spp, size=size, cameras=cameras):
-        if not args.quiet:
-            print(path)
+    with staged(args.out, inputs=inputs, made_by="render") as stage:
+        written = render_scene_files(scene, stage, spp=args.spp, size=size, cameras=cameras)
+    for path in written if not args.quiet else ():
+        print(final(path, stage, args.out))
+
+
+def final(path, stage, out):
+    """Where ``path``, written in the staged folder, lies once it is swapped in."""
+    return os.path.join(out, os.path.relpath(path, stage))
 
 
 def entry():

@@ -1,9 +1,13 @@
 """Fit the full-scene and background radiance fields of a dataset.
 
-    python scripts/train.py DATASET --out RUN [--variant V] [--config FILE] [--set name=value ...] [--resume]
+    python scripts/train.py DATASET --out RUN [--variant V] [--config FILE] [--set name=value ...]
+                            [--resume | --restart]
 
 Writes RUN/ (fields as <role>_grid.npz, scene.xml, config.json, metrics.json, previews/, training.png;
-checkpoints/ while it runs). The settings are listed below (defined in mi_voldis/fit/config.py).
+checkpoints/ while it runs). RUN may not be, hold or lie inside the dataset's files. A killed fit
+leaves RUN.partial: --resume continues it (refused with another dataset or other settings, but
+checkpoint_every and eval_every), --restart discards it. The settings are listed below (defined in
+mi_voldis/fit/config.py).
 """
 import json
 import sys
@@ -20,6 +24,7 @@ def main(argv=None):
     ap.add_argument("--config", help="JSON file of settings (a finished run's RUN/config.json works too)")
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override one setting")
     ap.add_argument("--resume", action="store_true", help="continue RUN.partial from its last checkpoint")
+    ap.add_argument("--restart", action="store_true", help="discard a resumable RUN.partial and fit afresh")
     ap.add_argument("--format", default="auto", choices=("auto", "llff", "transforms", "colmap"),
                     help="dataset format")
     ap.add_argument("--holdout", type=int, default=8, help="every k-th view is held out (without a split); 0: none")
@@ -39,7 +44,7 @@ def main(argv=None):
     from mi_voldis.fit.run import run_fit
     cfg = FitConfig.from_sources(args.config, args.set)
     metrics = run_fit(args.dataset, args.out, cfg, args.resume, not args.quiet, args.format, args.holdout,
-                      args.keep_checkpoints, args.factor)
+                      args.keep_checkpoints, args.factor, args.restart)
     print(json.dumps({"run": args.out, **metrics["held_out"], "seconds": metrics["seconds"]}, indent=1))
 
 

@@ -3,7 +3,8 @@
 RUN/ holds the fields (``<role>_grid.npz``), ``scene.xml`` (renders them through ``mi.load_file``),
 ``config.json`` (the settings and the dataset they were fitted on), ``metrics.json``, ``log.json``,
 ``training.png`` and ``previews/`` (and while it runs ``checkpoints/``). ``resume`` continues from
-RUN.partial/checkpoints/last.npz after a crash or kill -9.
+RUN.partial/checkpoints/last.npz after a crash or kill -9, for the same dataset (its files' names,
+sizes and times) and settings (:data:`MAY_CHANGE` aside) only.
 """
 import os
 import sys
@@ -12,7 +13,7 @@ import time
 import numpy as np
 
 from ..data import load_dataset
-from ..io.run_folder import peak_rss_mib, staged, write_json
+from ..io.run_folder import check_output, dataset_inputs, fingerprint, peak_rss_mib, staged, write_json
 from ..plots import plot_log
 from ..scene import write_scene
 from .config import FitConfig
@@ -22,16 +23,24 @@ from .train import fit
 
 PREVIEW = "previews"
 CHECKPOINT = os.path.join("checkpoints", "last.npz")
+MAY_CHANGE = ("checkpoint_every", "eval_every")  # settings a resumed fit may change: they shape no result
 
 
 def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto", holdout=8, keep_checkpoints=False,
-            factor=None):
+            factor=None, restart=False):
     """Fit the dataset at ``dataset_path`` into the run folder ``out``; returns the metrics.
     ``keep_checkpoints``: the finished run keeps ``checkpoints/last.npz`` (its final state, from which
-    :mod:`mi_voldis.bench.strategies` refits the background another way)."""
+    :mod:`mi_voldis.bench.strategies` refits the background another way). ``resume`` continues
+    ``OUT.partial`` (refused for another dataset or other settings); ``restart`` discards it.
+    The output and the dataset are checked before anything is removed."""
     cfg = cfg or FitConfig()
-    with staged(out, resume, keep_checkpoints) as stage:
-        dataset = load_dataset(dataset_path, fmt, holdout, factor)
+    inputs = dataset_inputs(dataset_path)
+    check_output(out, inputs, resume, restart, program="train")
+    dataset = load_dataset(dataset_path, fmt, holdout, factor)
+    record = dataset_record(dataset_path, dataset, holdout, factor)
+    job = {"settings": cfg.to_dict(), "dataset": {k: record[k] for k in ("path", "format", "holdout", "factor")},
+           "dataset_files": fingerprint(dataset_path, skip=[out])}
+    with staged(out, resume, keep_checkpoints, inputs, restart, "train", job, MAY_CHANGE) as stage:
         for line in dataset.meta.get("notes", []) if progress else ():
             print(f"note: {line}", file=sys.stderr)
         if dataset.effects is not None and progress:
@@ -39,7 +48,6 @@ def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto"
                 f"ignored: only bg_strategy 'guided' reads them, not '{cfg.bg_strategy}'"
             print(f"note: effect masks (the object's shadow) on {int(dataset.effects.any(axis=(1, 2)).sum())} of "
                   f"{len(dataset.images)} views: {use}", file=sys.stderr)
-        record = dataset_record(dataset_path, dataset, holdout, factor)
         write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": record})
         t0 = time.perf_counter()
         inputs, state = fit(dataset, os.path.join(stage, CHECKPOINT), cfg, resume=resume, progress=progress)

@@ -1,14 +1,24 @@
-"""Crash-safe output folders: staged, checkpointed, swapped into place whole.
+"""Crash-safe output folders: guarded, staged, checkpointed, swapped into place whole.
 
-Every long job (a fit, a task, a rendered dataset) writes into ``OUT.partial`` and, once complete,
-renames it to ``OUT`` (an existing ``OUT`` is first renamed to ``OUT.old`` and removed after the
-swap), so ``OUT`` is never half-written and a failure leaves it as it was. A killed job leaves its
-``OUT.partial`` with its checkpoints for ``--resume``; a finished job's ``OUT`` holds no checkpoints.
+Every job that writes a folder (a fit, a task, a rendered dataset, masks, renders, exports) writes
+into ``OUT.partial`` and, once complete, renames it to ``OUT`` (an existing ``OUT`` is first renamed
+to ``OUT.old`` and removed after the swap), so ``OUT`` is never half-written and a failure leaves it
+as it was. A killed job leaves its ``OUT.partial`` with its checkpoints for ``resume``; a finished
+job's ``OUT`` holds no checkpoints.
+
+Nothing a user has is lost: before any work :func:`check_output` refuses an ``OUT`` that is, holds
+or lies inside one of the job's inputs (real paths, so symbolic links count), an ``OUT`` that is a
+symbolic link, and an existing ``OUT``, ``OUT.old`` or ``OUT.partial`` that no mi-voldis job made
+(every folder a job stages holds :data:`MARKER`, naming the program and recording the job); a
+resumable ``OUT.partial`` is kept unless ``restart``. ``OUT.lock`` (the pid of the job) keeps a
+second job off the same ``OUT``; ``resume`` continues only the very job that was staged
+(:func:`check_resume`).
 """
 import contextlib
 import json
 import os
 import shutil
+import xml.etree.ElementTree as ET
 
 import numpy as np
 
@@ -19,17 +29,125 @@ def staging(out):
 
 CHECKPOINTS = "checkpoints"  # the folder of a job's checkpoints, inside its OUT.partial
 MIN_FREE_BYTES = 256 << 20  # refuse to start a job with less free disk than this beside OUT
+MARKER = ".mi-voldis"  # in every folder a job staged: {"made_by": program, "job": what it was asked to do}
+RESUMABLE = "holds the checkpoint of an unfinished job: --resume continues it, --restart discards it"
 
 
-def check_output(out, resume=False, min_free=MIN_FREE_BYTES):
-    """Checks made before any work: ``out`` is a folder or does not exist yet, the folder it will be
-    made in (its nearest existing ancestor; missing parents are created) is writable with ``min_free``
-    bytes free, and (``resume``) a staged ``OUT.partial`` exists. Raises ``ValueError`` naming the path."""
-    out = out.rstrip("/") or "/"
-    for path in (out, staging(out)):
+def _old(out):
+    return out.rstrip("/") + ".old"
+
+
+def _lock(out):
+    return out.rstrip("/") + ".lock"
+
+
+def read_marker(folder):
+    """The record :data:`MARKER` holds in ``folder``, or None where there is none."""
+    try:
+        with open(os.path.join(folder, MARKER)) as f:
+            record = json.load(f)
+    except (OSError, ValueError):
+        return None
+    return record if isinstance(record, dict) else None
+
+
+def write_marker(folder, made_by, job=None):
+    write_json(os.path.join(folder, MARKER), {"made_by": made_by, "job": job})
+
+
+def made_by(folder):
+    """The programs that may have written ``folder``: the one its :data:`MARKER` names, or for an
+    earlier version's output without one, those whose output it looks like (a run or task folder, a
+    checkpointed stage, a rendered dataset); empty when no mi-voldis job made it."""
+    record = read_marker(folder)
+    if record is not None:
+        return {record.get("made_by")}
+    has = lambda *p: os.path.isfile(os.path.join(folder, *p))  # noqa: E731
+    if has("config.json") and has("scene.xml") or has(CHECKPOINTS, "last.npz"):
+        return {"train", "optimize"}
+    try:
+        with open(os.path.join(folder, "transforms.json")) as f:
+            meta = json.load(f)
+    except (OSError, ValueError):
+        return set()
+    return {"make_dataset"} if isinstance(meta, dict) and {"scene", "seed", "spp"} <= set(meta) else set()
+
+
+def made_here(folder):
+    """Whether ``folder`` was written by a mi-voldis job (:func:`made_by`)."""
+    return bool(made_by(folder))
+
+
+def _inside(path, folder):
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
+def check_inputs(out, inputs):
+    """Refuse an ``out`` that is, holds or lies inside one of ``inputs`` (paths, (path, what it is) or
+    (path, what, :data:`MAY_HOLD`) where ``out`` may be made inside it), compared as real paths, so
+    that replacing ``out`` whole cannot touch what the job reads."""
+    real = os.path.realpath(out)
+    for item in inputs:
+        path, what, how = (tuple(item) + ("input", None))[:3] if isinstance(item, tuple) else (item, "input", None)
+        if path is None:
+            continue
+        other = os.path.realpath(path)
+        relation = "is" if real == other else "holds" if _inside(other, real) else \
+            "lies inside" if _inside(real, other) and how != MAY_HOLD else None
+        if relation:
+            raise ValueError(f"{out}: {relation} the {what} {path}, which this job reads; choose an output folder "
+                             "apart from its inputs")
+
+
+MAY_HOLD = "may hold"  # an input folder an output may be made in, beside what it holds
+
+
+def dataset_inputs(root, replaceable=()):
+    """The inputs that keep a dataset folder ``root`` whole: the folder (an output may be made in it)
+    and every entry in it but the folders of mi-voldis jobs (:func:`fingerprint` leaves out the same)
+    and the names in ``replaceable``."""
+    items = [(root, "dataset", MAY_HOLD)]
+    if os.path.isdir(root):
+        items += [(os.path.join(root, e), "dataset's file") for e in sorted(os.listdir(root))
+                  if e not in replaceable and not e.endswith(".lock") and not _job_folder(os.path.join(root, e), ())]
+    return items
+
+
+def check_output(out, inputs=(), resume=False, restart=False, min_free=MIN_FREE_BYTES, program=None):
+    """Checks made before any work: ``out`` names a folder apart from the job's ``inputs``
+    (:func:`check_inputs`), is not a symbolic link, and is a folder made by a mi-voldis job (or empty)
+    or does not exist yet (made by ``program``, when given: a render never replaces a run); ``OUT.old`` and ``OUT.partial`` were made by a job if they exist; a
+    resumable ``OUT.partial`` is kept unless ``restart`` (``resume``: it must exist); the folder ``out``
+    will be made in (its nearest existing ancestor; missing parents are created) is writable with
+    ``min_free`` bytes free. Raises ``ValueError`` naming the path."""
+    if not isinstance(out, str) or not out.strip():
+        raise ValueError(f"the output folder must be a path, got {out!r}")
+    if os.path.basename(os.path.normpath(out)) in ("", ".", ".."):
+        raise ValueError(f"{out}: names the current folder, its parent or the root, which cannot be replaced whole; "
+                         "give a folder inside it")
+    if resume and restart:
+        raise ValueError("--resume and --restart exclude each other (continue the staged job, or discard it)")
+    out = out.rstrip("/")
+    check_inputs(out, inputs)
+    if os.path.islink(out):
+        raise ValueError(f"{out}: is a symbolic link (to {os.readlink(out)}), which would be replaced by a folder; "
+                         "give the folder it points to or another output folder")
+    stage = staging(out)
+    for path in (out, stage, _old(out)):
         if os.path.exists(path) and not os.path.isdir(path):
             raise ValueError(f"{path}: exists and is not a folder (output folders are replaced whole; move the "
                              "file away or choose another --out)")
+        if os.path.isdir(path) and os.listdir(path) and not made_here(path):
+            verb = "replaced" if path == out else "removed"
+            raise ValueError(f"{path}: exists and was not written by mi-voldis (no {MARKER} in it), so it is not "
+                             f"{verb}; move it away or choose another output folder")
+    if program and os.path.isdir(out) and os.listdir(out) and program not in made_by(out):
+        raise ValueError(f"{out}: holds the output of {' or '.join(sorted(made_by(out)))}, not of {program}, so it "
+                         "is not replaced; choose another output folder")
+    if resume and not os.path.isdir(stage):
+        raise ValueError(f"{stage}: nothing to resume (no staged output)")
+    if not resume and not restart and _has_checkpoint(stage):
+        raise ValueError(f"{stage}: {RESUMABLE}")
     parent = os.path.dirname(os.path.abspath(out))
     while not os.path.exists(parent):
         parent = os.path.dirname(parent)
@@ -40,42 +158,184 @@ def check_output(out, resume=False, min_free=MIN_FREE_BYTES):
     free = shutil.disk_usage(parent).free
     if free < min_free:
         raise ValueError(f"{parent}: only {free >> 20} MiB free on this disk; a run needs at least {min_free >> 20}")
-    if resume and not os.path.isdir(staging(out)):
-        raise ValueError(f"{staging(out)}: nothing to resume (no staged output)")
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
 
 
 @contextlib.contextmanager
-def staged(out, resume=False, keep_checkpoints=False):
-    """``with staged(OUT, resume) as stage:`` write everything into ``stage``; on leaving the block
-    without an exception it replaces ``OUT``. ``resume``: continue an existing ``OUT.partial``.
-    A failed job leaves ``OUT`` as it was, and its ``OUT.partial`` only if it holds a checkpoint to
-    resume from; a finished one drops its ``checkpoints/`` (what it made is written beside them)
-    unless ``keep_checkpoints``."""
-    check_output(out, resume)
-    stage = staging(out)
-    if not resume:
-        shutil.rmtree(stage, ignore_errors=True)
-    os.makedirs(stage, exist_ok=True)
+def locked(out):
+    """Hold ``OUT.lock`` (made with O_EXCL, holding this process's id) while the block runs: a second
+    job on the same ``OUT`` is refused; a lock left by a process that is gone is taken over."""
+    path = _lock(out)
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    while True:
+        try:
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            break
+        except FileExistsError:
+            try:
+                with open(path) as f:
+                    pid = int(f.read().strip())
+            except (OSError, ValueError):
+                raise ValueError(f"{path}: another job holds {out} (or the lock holds no process id; remove it if "
+                                 "no job is writing there)") from None
+            if _alive(pid):
+                raise ValueError(f"{out}: another job (pid {pid}) is writing it; wait for it to finish or choose "
+                                 "another output folder") from None
+            with contextlib.suppress(FileNotFoundError):
+                os.remove(path)  # stale: the process that held it is gone
+    with os.fdopen(fd, "w") as f:
+        f.write(f"{os.getpid()}\n")
     try:
-        yield stage
-    except BaseException:
-        if not _has_checkpoint(stage):
-            shutil.rmtree(stage, ignore_errors=True)
-        raise
-    commit(stage, out)
-    if not keep_checkpoints:
-        shutil.rmtree(os.path.join(out, CHECKPOINTS), ignore_errors=True)
+        yield
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(path)
+
+
+def check_resume(stage, job, may_change=()):
+    """Refuse to resume ``stage`` for another job than the one staged there: ``job`` (a dict of what
+    the job depends on: settings, options, input fingerprints) against the one its :data:`MARKER`
+    records, except the keys in ``may_change``. The message names the differences."""
+    record = read_marker(stage)
+    if job is None or record is None or record.get("job") is None:
+        return
+    before, now = _flat(record["job"]), _flat(_finite(job))
+    changed = [k for k in sorted(set(before) | set(now)) if before.get(k) != now.get(k)
+               and k.split(".")[-1] not in may_change and k.split(".")[0] not in may_change]
+    if changed:
+        shown = "; ".join(f"{k}: {_short(before.get(k))} -> {_short(now.get(k))}" for k in changed[:4])
+        more = f" and {len(changed) - 4} more" if len(changed) > 4 else ""
+        raise ValueError(f"{stage}: --resume of another job than the one staged ({shown}{more}); give the same "
+                         "dataset, settings and options, or --restart to discard the checkpoint")
+
+
+def _flat(d, prefix=""):
+    out = {}
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict) and v:
+            out.update(_flat(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+def _short(value):
+    text = "(none)" if value is None else json.dumps(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def stamp(path):
+    """[size, modification time in ns] of the file ``path``: what tells a changed input."""
+    st = os.stat(path)
+    return [st.st_size, st.st_mtime_ns]
+
+
+def fingerprint(root, skip=()):
+    """{relative path: [size, mtime in ns]} of the files under ``root``, leaving out ``skip`` and the
+    folders of mi-voldis jobs in it (stages, old and locked outputs, runs and tasks; a
+    ``make_masks`` folder is kept: its masks are a dataset's)."""
+    skip = {os.path.realpath(s) for s in skip}
+    out = {}
+    for d, dirs, files in os.walk(root):
+        dirs[:] = sorted(x for x in dirs if not _job_folder(os.path.join(d, x), skip))
+        for f in sorted(files):
+            if f.endswith(".lock"):
+                continue
+            out[os.path.relpath(os.path.join(d, f), root)] = stamp(os.path.join(d, f))
+    return out
+
+
+def _job_folder(path, skip):
+    if os.path.realpath(path) in skip or path.endswith((".partial", ".old")):
+        return True
+    record = read_marker(path)
+    return record is not None and record.get("made_by") != "make_masks"
+
+
+def scene_files(path):
+    """The scene file ``path`` and the files it refers to (``<string value=...>`` and
+    ``<include filename=...>`` naming an existing file, relative to the scene's folder)."""
+    files = [path]
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError):
+        return files
+    folder = os.path.dirname(os.path.abspath(path))
+    for el in root.iter():
+        value = el.get("value") if el.tag == "string" else el.get("filename") if el.tag == "include" else None
+        if value and os.path.isfile(os.path.join(folder, value)):
+            files.append(os.path.normpath(os.path.join(folder, value)))
+    return files
+
+
+def run_files(run_dir):
+    """The files of a run folder that tasks, renders and scores read, as inputs: its scene, the
+    fields the scene refers to, and its settings."""
+    scene = os.path.join(run_dir, "scene.xml")
+    files = scene_files(scene) if os.path.isfile(scene) else []
+    config = os.path.join(run_dir, "config.json")
+    return [(p, "run's file") for p in files + ([config] if os.path.isfile(config) else [])]
+
+
+@contextlib.contextmanager
+def staged(out, resume=False, keep_checkpoints=False, inputs=(), restart=False, made_by="mi-voldis", job=None,
+           may_change=()):
+    """``with staged(OUT, resume) as stage:`` write everything into ``stage``; on leaving the block
+    without an exception it replaces ``OUT``. Checked first (:func:`check_output` against the job's
+    ``inputs``) and locked (:func:`locked`) while it runs. ``resume``: continue an existing
+    ``OUT.partial`` staged for the same ``job`` (:func:`check_resume`, but for ``may_change``);
+    ``restart``: discard a resumable one. A failed job leaves ``OUT`` as it was, and its
+    ``OUT.partial`` only if it holds a checkpoint to resume from; a finished one drops its
+    ``checkpoints/`` (what it made is written beside them) unless ``keep_checkpoints``. ``made_by``
+    and ``job`` are recorded in :data:`MARKER`."""
+    out = out.rstrip("/")
+    check_output(out, inputs, resume, restart, program=made_by)
+    stage = staging(out)
+    with locked(out):
+        check_output(out, inputs, resume, restart, program=made_by)  # again, now that no other job can change them
+        if resume:
+            check_resume(stage, job, may_change)
+        elif os.path.isdir(stage):
+            shutil.rmtree(stage)  # made by a job (checked above), and resumable only with restart
+        os.makedirs(stage, exist_ok=True)
+        write_marker(stage, made_by, job)
+        try:
+            yield stage
+        except BaseException:
+            if not _has_checkpoint(stage):
+                shutil.rmtree(stage, ignore_errors=True)
+            raise
+        commit(stage, out, made_by)
+        if not keep_checkpoints:
+            shutil.rmtree(os.path.join(out, CHECKPOINTS), ignore_errors=True)
 
 
 def _has_checkpoint(stage):
-    return any(f.endswith(".npz") for _, _, files in os.walk(stage) for f in files)
+    return os.path.isdir(stage) and any(f.endswith(".npz") for _, _, files in os.walk(stage) for f in files)
 
 
-def commit(stage, out):
-    """Replace ``out`` by the finished ``stage`` with renames only."""
-    old = out.rstrip("/") + ".old"
+def commit(stage, out, program="mi-voldis"):
+    """Replace ``out`` (made by a job, or empty: :func:`check_output`) by the finished ``stage`` with
+    renames only. ``OUT.old`` is removed only when a job made it."""
+    old = _old(out)
+    for folder in (old, out):
+        if os.path.isdir(folder) and os.listdir(folder) and not made_here(folder):
+            raise ValueError(f"{folder}: appeared while the job ran and was not written by mi-voldis; the result "
+                             f"stays in {stage}")
     shutil.rmtree(old, ignore_errors=True)
     if os.path.exists(out):
+        if read_marker(out) is None:  # an earlier version's output, or an empty folder: marked before it moves
+            write_marker(out, program)
         os.replace(out, old)
     os.replace(stage, out)
     shutil.rmtree(old, ignore_errors=True)

@@ -23,7 +23,7 @@ import numpy as np
 from ..data.conventions import mitsuba_to_opengl
 from ..data.llff import write_llff
 from ..io.images import linear_to_uint8, write_png
-from ..io.run_folder import staged
+from ..io.run_folder import check_output, scene_files, staged
 from ..progress import progress_iter
 from ..transforms import compose, to_scalar_transform
 from . import rigs, variants
@@ -99,9 +99,13 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
                  scene_folder=None, layout="transforms"):
     """Render the dataset of ``scene_path`` into ``out`` (see the module docstring); returns ``out``.
     ``scene_folder``: a folder copied into the dataset as ``scene/`` (e.g. a generated scene);
-    ``layout``: 'transforms' (with every ground truth) or 'spinnerf'."""
+    ``layout``: 'transforms' (with every ground truth) or 'spinnerf'. ``out`` may not be, hold or lie
+    inside the scene's files."""
     if layout not in LAYOUTS:
         raise ValueError(f"unknown dataset layout '{layout}' (expected {' or '.join(LAYOUTS)})")
+    inputs = [(p, "scene file") for p in scene_files(scene_path) + [os.path.splitext(scene_path)[0] + ".json"]]
+    inputs += [(scene_folder, "scene folder")] if scene_folder else []
+    check_output(out, inputs, program="make_dataset")
     rig = load_rig(scene_path)
     root = variants.parse(scene_path)
     prefix = rig.get("object_prefix", "object")
@@ -123,7 +127,7 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
     if layout == "spinnerf":
         split = ["train"] * views  # no moved ground truth
         cameras = spinnerf_order(cameras)
-    with staged(out) as tmp:
+    with staged(out, inputs=inputs, made_by="make_dataset") as tmp:
         if scene_folder is not None:
             shutil.copytree(scene_folder, os.path.join(tmp, "scene"))
         _render_views(tmp, scene_path, scenes, cameras, split, width, height, spp, seed, progress)
