@@ -420,3 +420,39 @@ def test_a_second_job_on_the_same_output_is_refused(tmp_path):
     with pytest.raises(ValueError, match="holds no process id"):
         with staged(out, made_by="test"):
             pass
+
+
+def test_threads_above_the_cores_are_warned(capsys):
+    import argparse
+    _boundary.set_threads(argparse.Namespace(threads=(os.cpu_count() or 1) + 1))
+    err = capsys.readouterr().err
+    assert err.startswith(f"warning: --threads {(os.cpu_count() or 1) + 1} is more than the") and err.count("\n") == 1
+    import drjit as dr
+    dr.set_thread_count(os.cpu_count() or 1)
+    _boundary.set_threads(argparse.Namespace(threads=1))
+    assert capsys.readouterr().err == ""
+    dr.set_thread_count(os.cpu_count() or 1)
+
+
+@pytest.mark.parametrize("call,message", [
+    (lambda run: run.render(view=1.7), "view: must be a view index (a whole number), got 1.7"),
+    (lambda run: run.render(view="r_000.png"), "view: must be a view index"),
+    (lambda run: run.render(view=999), "view: 999 is out of range (the dataset has 9 views)"),
+    (lambda run: run.render(layers=("composite", "shadow")), "layers: unknown layer 'shadow'"),
+    (lambda run: run.render(camera="front"), "camera: must be a mi_voldis.cameras.Camera"),
+    (lambda run: run.edit("explode"), "task: unknown task 'explode'"),
+    (lambda run: run.edit("transform", [1, 2]), "settings: must be a dict of transform settings"),
+])
+def test_the_api_names_the_wrong_argument(world, call, message):
+    import mi_voldis
+    run = mi_voldis.load_run(world["run"])
+    before = tree_digest(world["run"])
+    with pytest.raises(ValueError, match=message.replace("(", "\\(").replace(")", "\\)").replace(".", "\\.")):
+        call(run)
+    assert tree_digest(world["run"]) == before
+
+
+def test_the_api_renders_one_layer_given_as_a_string(world):
+    import mi_voldis
+    layers = mi_voldis.load_run(world["run"]).render(view=-1, layers="fg")
+    assert sorted(layers) == ["depth", "fg"] and layers["fg"].shape[-1] == 4

@@ -78,7 +78,12 @@ def add_threads(parser):
 
 
 def set_threads(args):
-    """Apply ``--threads`` to Dr.Jit's thread pool (the LLVM backend's; the CUDA variants ignore it)."""
+    """Apply ``--threads`` to Dr.Jit's thread pool (the LLVM backend's; the CUDA variants ignore it);
+    more threads than cores are allowed, with a warning (they only contend: many times slower)."""
+    cores = os.cpu_count() or 1
+    if args.threads and args.threads > cores:
+        print(f"warning: --threads {args.threads} is more than the {cores} cores here; threads beyond the cores "
+              "only slow the run down", file=sys.stderr)
     if args.threads:
         import drjit as dr
         dr.set_thread_count(args.threads)
