@@ -15,8 +15,8 @@ import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCRIPTS = os.path.join(ROOT, "scripts")
-from voldis_cli import boundary as _boundary  # noqa: E402
 from mi_voldis.io.run_folder import write_marker  # noqa: E402
+from voldis_cli import boundary as _boundary  # noqa: E402
 
 
 def script(name):

@@ -12,6 +12,7 @@ from conftest import ROOT, TINY_FIT
 from helpers import kill_after_checkpoint
 
 from mi_voldis.fit.config import FitConfig
+from mi_voldis.io.run_folder import write_marker
 from mi_voldis.render.views import render_camera
 
 
@@ -134,6 +135,7 @@ def test_resume_after_kill_equals_never_stopping(tiny_dataset, uninterrupted, tm
     out = tmp_path / "run"
     os.makedirs(out)
     (out / "keep.txt").write_text("an earlier run")
+    write_marker(str(out), "train")  # an earlier fit's output: replaced when the resumed one is complete
     proc = subprocess.Popen(train_args(tiny_dataset, out, RESUME_SETS), stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
     kill_after_checkpoint(proc, tmp_path / "run.partial" / "checkpoints" / "last.npz", step, phase=phase)

@@ -116,10 +116,11 @@ def dataset_inputs(root, replaceable=()):
 def check_output(out, inputs=(), resume=False, restart=False, min_free=MIN_FREE_BYTES, program=None):
     """Checks made before any work: ``out`` names a folder apart from the job's ``inputs``
     (:func:`check_inputs`), is not a symbolic link, and is a folder made by a mi-voldis job (or empty)
-    or does not exist yet (made by ``program``, when given: a render never replaces a run); ``OUT.old`` and ``OUT.partial`` were made by a job if they exist; a
-    resumable ``OUT.partial`` is kept unless ``restart`` (``resume``: it must exist); the folder ``out``
-    will be made in (its nearest existing ancestor; missing parents are created) is writable with
-    ``min_free`` bytes free. Raises ``ValueError`` naming the path."""
+    or does not exist yet (made by ``program``, when given: a render never replaces a run); ``OUT.old``
+    and ``OUT.partial`` were made by a job if they exist; a resumable ``OUT.partial`` is kept unless
+    ``restart`` (``resume``: it must exist); the folder ``out`` will be made in (its nearest existing
+    ancestor; missing parents are created) is writable with ``min_free`` bytes free. Raises
+    ``ValueError`` naming the path."""
     if not isinstance(out, str) or not out.strip():
         raise ValueError(f"the output folder must be a path, got {out!r}")
     if os.path.basename(os.path.normpath(out)) in ("", ".", ".."):
