@@ -34,7 +34,7 @@ def _pow2(n):
 
 
 DRJIT = SimpleNamespace(exp=dr.exp, pow2=_pow2, round=dr.round, clip=dr.clip, select=dr.select,
-                        abs=dr.abs, maximum=dr.maximum, minimum=dr.minimum)
+                        minimum=dr.minimum)
 """The operations the formulas use, on Dr.Jit arrays of the active variant (``exp``: the backend's own)."""
 
 
@@ -56,19 +56,25 @@ def log1p_unit(u):
     return 2.0 * (s + s * z * series)
 
 
+def _minus_abs(x, ops):
+    """-|x| as a select, whose derivative at 0 is that of the branch x >= 0 (-1); the derivative of abs
+    there is 0, which would leave raw values of exactly 0 (grey colours) without a gradient."""
+    return ops.select(x >= 0.0, -x, x)
+
+
 def softplus(x, ops=DRJIT):
     """Density activation sigma = softplus(x) = log(1 + e^x): positive, smooth, never dead.
 
     Evaluated as max(x, 0) + log1p(e^-|x|) so that it neither overflows for large x nor loses
     precision for very negative x (softplus(-13.8) = 1e-6 and softplus(-30) = 9.4e-14 to float
     precision)."""
-    return ops.maximum(x, 0.0) + log1p_unit(exp(-ops.abs(x), ops))
+    return ops.select(x >= 0.0, x, 0.0) + log1p_unit(exp(_minus_abs(x, ops), ops))
 
 
 def sigmoid(x, ops=DRJIT):
     """Colour activation c = 1 / (1 + e^-x), in (0, 1): with e = e^-|x| <= 1, 1 / (1 + e) for x >= 0 and
     e / (1 + e) below (no overflow, full relative precision as c goes to 0)."""
-    e = exp(-ops.abs(x), ops)
+    e = exp(_minus_abs(x, ops), ops)
     d = 1.0 / (1.0 + e)
     return ops.select(x >= 0.0, d, e * d)
 

@@ -156,8 +156,9 @@ def test_homogeneous_box_under_emulated_cuda(bias, sigma, samples):
     (lambda x: one_minus_exp(dr.abs(x)), lambda x: np.sign(x) * np.exp(-np.abs(x)))])
 def test_activation_gradients(f, derivative):
     """Reverse-mode derivatives of the activations (what the adjoint march back-propagates) against
-    their analytic forms in float64, on both sides of every branch and at the clipped exponents."""
-    x = np.array([-100.0, -30.0, -13.8, -1.0, -0.3, -1e-3, 1e-6, 0.2, 0.49, 0.51, 2.0, 20.0, 80.0])
+    their analytic forms in float64, on both sides of every branch, at 0 (where raw colours start) and at
+    the clipped exponents."""
+    x = np.array([-100.0, -30.0, -13.8, -1.0, -0.3, -1e-3, 0.0, 1e-6, 0.2, 0.49, 0.51, 2.0, 20.0, 80.0])
     xs = mi.Float(x)
     dr.enable_grad(xs)
     dr.backward(dr.sum(f(xs)))
