@@ -1,6 +1,6 @@
 """The README's main command: the whole pipeline on the bundled default scene.
 
-    python scripts/demo.py [--scene scenes/tabletop.xml] [--out out/demo] [--spp 128] [--variant V]
+    python scripts/demo.py [--scene SCENE.xml] [--out out/demo] [--spp 128] [--variant V]
 
 Renders the dataset (Mitsuba path tracer, with ground truth), fits the full and background fields,
 disentangles the object, runs removal / transform / camouflage / non-negative edits, writes layered
@@ -13,12 +13,11 @@ import sys
 
 from .boundary import run
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--scene", default=os.path.join(HERE, "..", "scenes", "tabletop.xml"))
+    ap.add_argument("--scene", help="a Mitsuba scene with its rig beside it (default: the bundled tabletop scene, "
+                                    "scenes/tabletop.xml, also in an installed package)")
     ap.add_argument("--out", default="out/demo")
     ap.add_argument("--spp", type=int, default=128, help="path-tracing samples per pixel of the dataset")
     ap.add_argument("--variant", default="llvm_ad_rgb")
@@ -28,8 +27,10 @@ def main(argv=None):
     args = ap.parse_args(argv)
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
     from mi_voldis.demo import run_demo
+    from mi_voldis.synth import bundled_scene
+    scene = os.path.normpath(args.scene) if args.scene else bundled_scene("tabletop")
     try:
-        summary = run_demo(args.out, os.path.normpath(args.scene), args.spp, not args.quiet, args.composition)
+        summary = run_demo(args.out, scene, args.spp, not args.quiet, args.composition)
     except ValueError as e:
         sys.exit(f"error: {e}")
     fit = summary["fit"]

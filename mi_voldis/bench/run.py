@@ -21,10 +21,11 @@ import subprocess
 import sys
 import time
 
+from ..synth import bundled_scene
 from . import content, machine, rays, throughput
 from .strategies import BACKGROUND_SETTINGS
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the checkout, or site-packages
 # the real captures (README's data): $MI_VOLDIS_CAPTURES, else ../shared/data beside the checkout
 SHARED = os.environ.get("MI_VOLDIS_CAPTURES") or os.path.join(os.path.dirname(ROOT), "shared", "data")
 
@@ -58,13 +59,17 @@ def section_scenes(section, scenes=None):
 def child(args, log_file=None):
     """Run a child Python process; returns its wall-clock seconds. Raises on failure. (Children report
     their own peak memory in metrics.json: ``ru_maxrss`` of a forked child includes the parent's.) A
-    script runs on this process's variant (its ``--variant`` would otherwise default to llvm_ad_rgb)."""
+    script runs on this process's variant (its ``--variant`` would otherwise default to llvm_ad_rgb).
+    ``scripts/NAME.py`` (as the report states the command) runs as ``python -m voldis_cli NAME``, the same
+    program, which an installed package has without the scripts; the children start in ROOT, the folder
+    that holds this package, so that ``-m`` imports this copy of it."""
     import mitsuba as mi
+    command = list(args)
     if args[0].endswith(".py"):
-        args = args + ["--variant", mi.variant()]
+        command = ["-m", "voldis_cli", os.path.basename(args[0])[:-3]] + args[1:] + ["--variant", mi.variant()]
     t = time.perf_counter()
     with open(log_file or os.devnull, "w") as log:
-        status = subprocess.run([sys.executable] + args, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT).returncode
+        status = subprocess.run([sys.executable] + command, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT).returncode
     if status != 0:
         raise RuntimeError(f"{' '.join(args)} failed (status {status}); see {log_file}")
     return time.perf_counter() - t
@@ -176,8 +181,7 @@ def time_to_within(curve, best, tolerance=0.5):
 def make_data(scene, out, log_dir, quick):
     """A bundled scene's dataset, or (``scene`` 'random<SEED>') a random scene's, rendered once."""
     if not os.path.isfile(os.path.join(out, "transforms.json")):
-        source = ["--random", scene[len("random"):]] if scene.startswith("random") else \
-            [os.path.join("scenes", scene + ".xml")]
+        source = ["--random", scene[len("random"):]] if scene.startswith("random") else [bundled_scene(scene)]
         args = ["scripts/make_dataset.py"] + source + ["--out", out]
         if quick:
             args += ["--views", "24", "--spp", "32"]

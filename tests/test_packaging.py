@@ -1,0 +1,83 @@
+"""The wheel: built from the checkout as `pip install .` builds it, it holds the bundled scenes (with
+every texture they refer to), and the installed package finds them and runs the benchmark's children
+without the checkout's scripts/."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    """The project's wheel, built offline (no build isolation: the test extra's setuptools) from a copy of
+    the checkout, so that the build's own folders never land in the shared working tree."""
+    try:
+        from setuptools import __version__ as setuptools_version
+    except ImportError:
+        pytest.skip("setuptools is not installed (pip install -e '.[test]')")
+    if int(setuptools_version.split(".")[0]) < 77:
+        pytest.skip(f"setuptools {setuptools_version} < 77, which pyproject.toml's licence field needs "
+                    "(pip install -e '.[test]')")
+    tmp = tmp_path_factory.mktemp("wheel")
+    src = tmp / "src"
+    src.mkdir()
+    for name in ("pyproject.toml", "README.md", "LICENSE"):
+        shutil.copy(os.path.join(ROOT, name), src / name)
+    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info")
+    for name in ("mi_voldis", "voldis_cli", "scenes"):  # the package's scenes link stays a link to scenes/
+        shutil.copytree(os.path.join(ROOT, name), src / name, symlinks=True, ignore=ignore)
+    built = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+                            "-w", str(tmp / "dist"), str(src)], capture_output=True, text=True, timeout=300)
+    assert built.returncode == 0, built.stderr
+    [path] = (tmp / "dist").glob("mi_voldis-*.whl")
+    return path
+
+
+def test_the_wheel_holds_the_bundled_scenes_and_every_file_they_refer_to(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for scene in ("tabletop", "room"):
+        assert f"mi_voldis/scenes/{scene}.xml" in names and f"mi_voldis/scenes/{scene}.json" in names
+        with zipfile.ZipFile(wheel).open(f"mi_voldis/scenes/{scene}.xml") as f:
+            files = [e.get("value") for e in ET.parse(f).iter("string") if e.get("name") == "filename"]
+        assert files, scene
+        for file in files:
+            assert f"mi_voldis/scenes/{file}" in names, f"{scene}.xml refers to {file}, not in the wheel"
+    # the programs the benchmark starts as python -m voldis_cli NAME
+    assert "voldis_cli/__main__.py" in names and "voldis_cli/make_dataset.py" in names
+    assert not any(n.startswith(("scripts/", "scenes/", "tests/")) for n in names)
+
+
+def test_the_installed_package_finds_its_scene_and_runs_the_benchmarks_dataset_child(wheel, tmp_path):
+    """From the unpacked wheel (first on the path, started elsewhere than the checkout): the demo's default
+    scene is the package's own, and the benchmark's child for a bundled dataset (``scripts/make_dataset.py``
+    in its report) renders it, with its textures, though no scripts/ folder is installed."""
+    site = tmp_path / "site"
+    zipfile.ZipFile(wheel).extractall(site)
+    out = tmp_path / "data"
+    code = (
+        "import json, os, sys\n"
+        "import mi_voldis\n"
+        "from mi_voldis.synth import bundled_scene\n"
+        "from mi_voldis.bench import run\n"
+        "scene = bundled_scene('tabletop')\n"
+        "run.child(['scripts/make_dataset.py', scene, '--out', sys.argv[1], '--views', '3', '--res', '16x12',\n"
+        "           '--spp', '1', '--quiet'], sys.argv[2])\n"
+        "print(json.dumps({'package': mi_voldis.__file__, 'scene': scene, 'root': run.ROOT}))\n")
+    env = {**os.environ, "PYTHONPATH": str(site)}
+    done = subprocess.run([sys.executable, "-c", code, str(out), str(tmp_path / "child.log")], capture_output=True,
+                          text=True, cwd=tmp_path, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr + (tmp_path / "child.log").read_text()
+    found = json.loads(done.stdout.strip().splitlines()[-1])
+    assert found["package"] == str(site / "mi_voldis" / "__init__.py")
+    assert found["scene"] == str(site / "mi_voldis" / "scenes" / "tabletop.xml") and found["root"] == str(site)
+    assert not (site / "scripts").exists()
+    with open(out / "transforms.json") as f:
+        frames = json.load(f)["frames"]
+    assert len(frames) == 3 and all((out / fr["file_path"]).is_file() for fr in frames)
