@@ -12,7 +12,7 @@ import math
 import types
 
 # keys a run's config.json holds beside the settings (what was fitted, on what), skipped when read back
-RECORD_KEYS = ("dataset", "task")
+RECORD_KEYS = ("dataset", "task", "space_used")
 
 
 def setting(default, help, *, low=None, high=None, above=None, choices=None, check=None):
@@ -52,8 +52,8 @@ def check_field(f, value):
             return None
         return f"one of {', '.join(json.dumps(c) for c in meta['choices'])}"
     why = _type_error(value, f.type)
-    if why:
-        return why
+    if why:  # a field with its own check says what it takes better than its type's names
+        return (meta["check"](value) or why) if meta.get("check") is not None else why
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         low, high, above = meta.get("low"), meta.get("high"), meta.get("above")
         if low is not None and value < low or high is not None and value > high or above is not None \

@@ -127,7 +127,7 @@ CASES = [
     (T, ["{dataset}", "--out", "{existing}", "--set", "occupancy_resolution=-1"], 1, "unknown setting"),
     (T, ["{dataset}", "--out", "{existing}", "--set", "minutes=-1"], 1, "minutes must be"),
     (T, ["{dataset}", "--out", "{existing}", "--set", "steps_full"], 1, "name=value"),
-    (T, ["{dataset}", "--out", "{existing}", "--set", "batch_rays=1.5"], 1, "batch_rays must be a whole number"),
+    (T, ["{dataset}", "--out", "{existing}", "--set", "batch_rays=1.5"], 1, "batch_rays must be 'auto' or"),
     (T, ["{dataset}", "--out", "{existing}", "--set", "sh_degree=3"], 1, "sh_degree must be one of"),
     (T, ["{dataset}", "--out", "{existing}", "--config", "{base}/list.json"], 1,
      "{base}/list.json: settings must be a JSON object"),

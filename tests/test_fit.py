@@ -35,6 +35,7 @@ def test_run_writes_everything(tiny_run):
     assert dataset["format"] == "transforms" and dataset["holdout"] == 8
     ds_box = json.load(open(os.path.join(dataset["path"], "transforms.json")))["aabb"]
     assert m["space"] == "world" and np.allclose([m["box"]["lo"], m["box"]["hi"]], ds_box)
+    assert json.load(open(os.path.join(tiny_run, "config.json")))["space_used"] == "world"  # 'auto' as resolved
     assert 0 < m["bricks"]["full"]["allocated"] <= m["bricks"]["full"]["of"]
 
 
@@ -71,7 +72,7 @@ def test_bad_config_is_refused(tmp_path):
     with pytest.raises(ValueError, match="name=value"):
         FitConfig.from_sources(None, ["steps_full"])
     for item, message in (("batch_tile=0", "--set batch_tile=0: batch_tile must be a number >= 1, got 0"),
-                          ("batch_rays=1.5", "batch_rays must be a whole number, got 1.5"),
+                          ("batch_rays=1.5", "batch_rays must be 'auto' or a whole number >= 1, got 1.5"),
                           ("step_voxels=-1", "step_voxels must be a number > 0, got -1"),
                           ("lr_color=\"fast\"", "lr_color must be a number, got \"fast\"")):
         with pytest.raises(ValueError, match=re.escape(message)):

@@ -23,7 +23,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def test_stages_double_up_to_the_final_resolution_and_start_at_the_given_fractions():
-    cfg = FitConfig()
+    cfg = FitConfig().for_backend("llvm")
     assert stages(cfg, 64, 512) == [(0.0, 64), (0.1, 128), (0.2, 256), (0.35, 512)]
     assert stages(cfg, 64, 300) == [(0.0, 64), (0.2, 150), (0.35, 300)]
     assert stages(cfg, 64, 64) == [(0.0, 64)]
@@ -40,15 +40,45 @@ def test_steps_fill_the_budget_under_the_cost_model():
     assert [resolution_at([[0, 64], [11, 128], [12, 256]], s) for s in (0, 10, 11, 12, 99)] == [64, 64, 128, 256, 256]
 
 
-def test_affordable_resolution_shows_every_pixel_min_epochs_times_in_the_last_stage():
-    cfg = FitConfig()
-    pixels, seconds, budget = 2_000_000, 0.01, 600.0
-    r = affordable_resolution(cfg, 64, seconds, budget, pixels)
-    steps = cfg.min_epochs * pixels / cfg.batch_rays
+SURVEY = {"surface_cells": 20_000.0, "surface_resolution": 64, "ray_hits": 0.9, "capture_resolution": 1024}
+PIXELS = 40_000_000  # training pixels: enough for any grid below
+
+
+def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_of_the_last_stage():
+    cfg = FitConfig().for_backend("llvm")
+    seconds, budget = 0.01, 600.0
+    r = affordable_resolution(cfg, 64, seconds, budget, SURVEY, PIXELS)
     last_share = 1.0 - cfg.stage_starts[-1]
-    assert steps * seconds * (r / 64) ** COST_EXPONENT <= last_share * budget  # affordable
-    assert steps * seconds * ((r + 16) / 64) ** COST_EXPONENT > last_share * budget  # the finest such
+
+    def observations(res):  # rays ending per surface cell over the last stage at resolution res
+        steps = last_share * budget / (seconds * (res / 64) ** COST_EXPONENT)
+        return steps * cfg.batch_rays * SURVEY["ray_hits"] / (SURVEY["surface_cells"] * (res / 64) ** 2)
+    assert observations(r) >= cfg.min_observations > observations(r + 16)  # the finest such
     assert r % 16 == 0
+    # the cells were counted on a finer grid: the same surface, the same answer
+    finer = dict(SURVEY, surface_cells=SURVEY["surface_cells"] * 4, surface_resolution=128)
+    assert affordable_resolution(cfg, 64, seconds, budget, finer, PIXELS) == r
+    # twice the budget buys a finer grid; a surface twice as large a coarser one; never below the coarse grid
+    assert affordable_resolution(cfg, 64, seconds, 2 * budget, SURVEY, PIXELS) > r
+    assert affordable_resolution(cfg, 64, seconds, budget, dict(SURVEY, surface_cells=4e4), PIXELS) < r
+    assert affordable_resolution(cfg, 64, seconds, 1e-3, SURVEY, PIXELS) == 64
+    # few pixels: no more surface cells than pixels end on them, whatever the budget
+    few = affordable_resolution(cfg, 64, seconds, 1e6, SURVEY, 200_000)
+    assert SURVEY["surface_cells"] * (few / 64) ** 2 <= 200_000 * SURVEY["ray_hits"] < \
+        SURVEY["surface_cells"] * ((few + 16) / 64) ** 2
+
+
+def test_surface_cells_is_the_effective_number_of_cells_rays_end_in():
+    from mi_voldis.fit.schedule import surface_cells
+    rng = np.random.default_rng(0)
+    for cells, draws in ((5000, 20000), (50000, 20000), (300, 100000)):  # S cells alike: S, however many draws
+        counts = np.bincount(rng.integers(0, cells, draws))
+        assert surface_cells(counts[counts > 0]) == pytest.approx(cells, rel=0.05)
+    # 1000 cells take 90% of the ray ends, 100000 fog cells the rest: 1 / (0.9^2 / 1000 + 0.1^2 / 1e5) = 1234
+    ends = np.concatenate([rng.integers(0, 1000, 90000), 1000 + rng.integers(0, 100000, 10000)])
+    counts = np.bincount(ends)
+    assert surface_cells(counts[counts > 0]) == pytest.approx(1 / (0.81 / 1000 + 0.01 / 1e5), rel=0.05)
+    assert surface_cells([1, 1, 1]) == 3  # no cell hit twice: as many cells as ends
 
 
 def test_rescale_fits_the_stages_ahead_to_the_budget_left():
@@ -138,7 +168,7 @@ PLANS = {}  # load -> (schedule, steps) of the parametrised test below
 def test_the_default_plan_is_costed_at_the_reference_speed_whatever_the_machine(load):
     """minutes 'auto': a coarse step costs its samples over reference_msps, however long it took here;
     the budget decides the steps, min_steps their floor, and nothing is re-timed while the fit runs."""
-    cfg = FitConfig().replace(resolution=256, min_steps=500)
+    cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=500)
     samples = 0.01 * cfg.reference_msps * 1e6  # 0.01 s a coarse step at the reference speed
     state = planned(cfg, calibrated(0.01 * load, samples))
     budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
@@ -157,17 +187,18 @@ def test_the_default_plan_is_costed_at_the_reference_speed_whatever_the_machine(
 
 def test_the_default_resolution_is_the_finest_the_reference_speed_affords(monkeypatch):
     import mi_voldis.fit.train as train
-    monkeypatch.setattr(train, "capture_resolution", lambda *a: 1024)  # the capture asks for more than it buys
-    cfg = FitConfig().replace(min_steps=0, min_epochs=400)
+    monkeypatch.setattr(train, "capture_survey", lambda *a: SURVEY)  # the capture asks for more than it buys
+    cfg = FitConfig().for_backend("llvm").replace(min_steps=0)
     samples = 0.01 * cfg.reference_msps * 1e6
     for load in (1.0, 4.0):
         state = planned(cfg, calibrated(0.01 * load, samples))
         budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
-        assert state.plan["final_resolution"] == affordable_resolution(cfg, 64, 0.01, budget, 4 * 100 * 100) < 1024
+        assert state.plan["final_resolution"] == affordable_resolution(cfg, 64, 0.01, budget, SURVEY,
+                                                                       4 * 100 * 100) < 1024
 
 
 def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked():
-    cfg = FitConfig().replace(resolution=256, min_steps=5000)
+    cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=5000)
     state = planned(cfg, calibrated(0.5, 0.01 * cfg.reference_msps * 1e6))  # a slow machine changes nothing
     budgeted = steps_for(stages(cfg, 64, 256), 0.01, state.plan["budget_seconds"] - 2.0)
     assert budgeted < 5000 and state.plan["min_steps"] == 5000 and state.schedule[-1][1] == 256
@@ -175,7 +206,7 @@ def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked():
 
 
 def test_a_budget_in_minutes_is_timed_here_and_rescaled_as_the_fit_runs():
-    cfg = FitConfig().replace(minutes=0.5, resolution=64)  # one stage: a replan times the stage running
+    cfg = FitConfig().for_backend("llvm").replace(minutes=0.5, resolution=64)  # one stage: a replan times it
     slow, fast = (planned(cfg, calibrated(s, 1e5)) for s in (0.02, 0.01))
     assert "min_steps" not in slow.plan and slow.plan["coarse_step_seconds"] == 0.02
     assert fast.steps_full > slow.steps_full > 500  # the same budget buys a faster machine more steps
@@ -199,3 +230,28 @@ def test_the_plan_is_reported_in_one_line():
                                     "(8.1 min at the reference speed); the capture asks 800, the budget affords 288")
     state.plan = {"capture_resolution": 96, "affordable_resolution": 128, "minutes": 2.0}  # timed, capture-bound
     assert describe_plan(state).endswith("(2.0 min of this machine's wall clock); the capture asks 96")
+
+
+def test_the_default_plan_follows_the_backend(monkeypatch):
+    """'auto' batch, reference speed and budget are the backend's: on cuda a coarse step of the same samples
+    is costed 15x cheaper, the budget is shorter, the batch larger, and the plan buys more steps."""
+    from types import SimpleNamespace
+
+    import mi_voldis.fit.train as train
+    from mi_voldis.fit.schedule import BACKENDS, auto_minutes
+    big = SimpleNamespace(train=list(range(100)), size=(500, 400))  # 20 Mpx
+    assert auto_minutes(big, "llvm") == 10.0 and auto_minutes(big, "cuda") == 5.0
+    small = SimpleNamespace(train=list(range(4)), size=(100, 100))
+    assert auto_minutes(small, "llvm") == 1.5 and auto_minutes(small, "cuda") == 1.0
+    plans = {}
+    for which in ("llvm", "cuda"):
+        monkeypatch.setattr(train, "backend", lambda w=which: w)
+        cfg = FitConfig().replace(resolution=256, min_steps=0).for_backend(which)
+        assert cfg.batch_rays == BACKENDS[which].batch_rays and cfg.reference_msps == BACKENDS[which].reference_msps
+        plans[which] = planned(cfg, calibrated(0.01, 0.01 * 18e6)).plan  # the same samples a coarse step
+    assert plans["llvm"]["coarse_step_seconds"] == pytest.approx(0.01)
+    assert plans["cuda"]["coarse_step_seconds"] == pytest.approx(0.01 * 18 / 270)
+    assert plans["cuda"]["minutes"] == 1.0 and plans["llvm"]["minutes"] == 1.5
+    # explicit values stay
+    cfg = FitConfig().replace(batch_rays=1000, reference_msps=5.0).for_backend("cuda")
+    assert (cfg.batch_rays, cfg.reference_msps) == (1000, 5.0)

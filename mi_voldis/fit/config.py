@@ -45,12 +45,25 @@ def _fractions_error(value):
     return "a list of increasing fractions in (0, 1)"
 
 
+def _auto_or_positive(value):
+    if value == "auto" or (isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0):
+        return None
+    return "'auto' or a positive number"
+
+
+def _auto_or_count(value):
+    if value == "auto" or (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+        return None
+    return "'auto' or a whole number >= 1"
+
+
 @dataclass
 class FitConfig(Settings):
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
                                  "'world' (the dataset's box), 'ndc' (forward-facing captures) or 'auto' "
-                                 "(world where the dataset states a box, else contract)",
+                                 "(world where the dataset states a box, ndc for forward-facing cameras, else "
+                                 "contract; config.json records the space chosen as space_used)",
                          choices=("auto", "contract", "world", "ndc"))
     contract_shell: float = setting(1.0, "contracted space: the outer shell's share b of the scene cube "
                                          "[-(1 + b), 1 + b]^3 (1: Mip-NeRF 360)", above=0)
@@ -61,9 +74,11 @@ class FitConfig(Settings):
                                                   "costed at reference_msps, and min_steps at least; a number: "
                                                   "minutes of this machine's wall clock; null: steps_full)",
                                         check=_minutes_error)
-    reference_msps: float = setting(18.0, "with minutes 'auto', the coarse stage's speed the plan assumes, in "
-                                          "M samples/s (the project's 2-core machine): the plan depends on the "
-                                          "capture alone, not on how fast or busy this machine is", above=0)
+    reference_msps: float | str = setting("auto", "with minutes 'auto', the coarse stage's speed the plan assumes, "
+                                                  "in M samples/s ('auto': the backend's, mi_voldis.fit.schedule."
+                                                  "BACKENDS: 18 on llvm, the project's 2-core machine; 270 on cuda): "
+                                                  "the plan depends on the capture and the backend, not on how fast "
+                                                  "or busy this machine is", check=_auto_or_positive)
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
     min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
                                    "overrunning the budget where it allows fewer (the resolution is chosen "
@@ -73,8 +88,10 @@ class FitConfig(Settings):
                                     check=_resolution_error)
     pixels_per_voxel: float = setting(1.0, "'auto' resolution: voxel width in training-view pixels", above=0)
     max_resolution: int = setting(1024, "cap on the final resolution (and the density scale's unit)", low=8)
-    min_epochs: float = setting(6.0, "with a time budget, the final resolution lets its stage pass this many "
-                                     "times over the training pixels", above=0)
+    min_observations: float = setting(64.0, "with a time budget, the final resolution lets its stage end this "
+                                            "many training rays in every cell where rays end (surfaces): a grid "
+                                            "seen too few times is worse than a coarser one seen often",
+                                      above=0)
     coarse_resolution: int = setting(64, "resolution of the first stage", low=4)
     stages: int = setting(4, "coarse-to-fine stages, each doubling the resolution", low=1, high=8)
     stage_starts: list = setting([0.1, 0.2, 0.35], "where stages 2, 3, ... start, as fractions of steps_full",
@@ -84,7 +101,8 @@ class FitConfig(Settings):
                                                      "...] (null: derived from the settings above)",
                                                check=_schedule_error)
     steps_bg: int = setting(150, "steps of the background refit (every bg_strategy but 'scratch')", low=0)
-    batch_rays: int = setting(8192, "random rays per step, drawn across all training views", low=1)
+    batch_rays: int | str = setting("auto", "random rays per step, drawn across all training views ('auto': the "
+                                            "backend's, 8192 on llvm, 32768 on cuda)", check=_auto_or_count)
     batch_tile: int = setting(1, "> 1: rays in tile x tile pixel tiles (coherent: faster marches, worse "
                                  "fits per second)", low=1)
     step_voxels: float = setting(0.5, "sample spacing along a ray, in voxels of the current grid", above=0)
@@ -201,6 +219,13 @@ class FitConfig(Settings):
     eval_every: int = setting(250, "steps between held-out PSNR evaluations for the PSNR-vs-time log", low=1)
     eval_views: int = setting(3, "held-out views rendered for that log", low=0)
     preview_views: int = setting(3, "held-out views written as PNG previews", low=0)
+
+    def for_backend(self, which):
+        """These settings with what is 'auto' per backend (``which``: 'llvm' or 'cuda') made explicit."""
+        from .schedule import BACKENDS
+        b = BACKENDS[which]
+        return self.replace(reference_msps=b.reference_msps if self.reference_msps == "auto" else self.reference_msps,
+                            batch_rays=b.batch_rays if self.batch_rays == "auto" else self.batch_rays)
 
     def check(self):
         if self.minutes is None and self.steps_full is None:

@@ -13,12 +13,14 @@ import time
 import numpy as np
 
 from ..data import load_dataset
+from ..data.scene_box import fitting_box
 from ..io.run_folder import check_output, dataset_inputs, fingerprint, peak_rss_mib, staged, write_json
 from ..plots import plot_log
 from ..scene import write_scene
 from .config import FitConfig
 from .fields import fit_integrator, occupancy_resolution, occupancy_sigma, sample_step, scene_properties
 from .report import evaluate, write_previews
+from .schedule import backend
 from .train import fit
 
 PREVIEW = "previews"
@@ -33,7 +35,7 @@ def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto"
     :mod:`mi_voldis.bench.strategies` refits the background another way). ``resume`` continues
     ``OUT.partial`` (refused for another dataset or other settings); ``restart`` discards it.
     The output and the dataset are checked before anything is removed."""
-    cfg = cfg or FitConfig()
+    cfg = (cfg or FitConfig()).for_backend(backend())  # config.json records the rays and speed planned with
     inputs = dataset_inputs(dataset_path)
     check_output(out, inputs, resume, restart, program="train")
     dataset = load_dataset(dataset_path, fmt, holdout, factor)
@@ -48,7 +50,8 @@ def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto"
                 f"ignored: only bg_strategy 'guided' reads them, not '{cfg.bg_strategy}'"
             print(f"note: effect masks (the object's shadow) on {int(dataset.effects.any(axis=(1, 2)).sum())} of "
                   f"{len(dataset.images)} views: {use}", file=sys.stderr)
-        write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": record})
+        space = fitting_box(dataset, cfg.space, cfg.contract_shell).kind  # 'auto' resolved from the cameras
+        write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": record, "space_used": space})
         t0 = time.perf_counter()
         inputs, state = fit(dataset, os.path.join(stage, CHECKPOINT), cfg, resume=resume, progress=progress)
         fit_seconds = time.perf_counter() - t0

@@ -5,10 +5,11 @@ derived from the capture and the time budget once the first, coarse stage has ru
 ``calibration_steps`` steps (and is then frozen in the fit's checkpoint, so a resumed fit follows it):
 
 * the final resolution (``resolution`` 'auto') makes a voxel about ``pixels_per_voxel`` pixels of the
-  training views wide where their rays end (:func:`capture_resolution`), at most ``max_resolution``,
-  and no finer than lets the last stage show every training pixel ``min_epochs`` times in its share of
-  the budget (:func:`affordable_resolution`): a sharp grid seen too few times is worse than a coarser
-  one seen often;
+  training views wide where their rays end (:func:`capture_survey`), at most ``max_resolution``,
+  and no finer than lets the last stage end ``min_observations`` training rays in every surface cell
+  in its share of the budget (:func:`affordable_resolution`): a sharp grid seen too few times is worse
+  than a coarser one seen often. Observations, not passes over the pixels, are the currency: a capture
+  with more views never gets a coarser grid than the same scene with fewer;
 * ``stages`` resolutions double up to it, each starting at its ``stage_starts`` fraction of the steps;
 * the number of steps (``steps_full``, or from ``minutes``) fills the budget, with the seconds a step
   took in the coarse stage scaled to each stage's resolution as (R_k / R_1)^COST_EXPONENT (measured: a
@@ -16,17 +17,20 @@ derived from the capture and the time budget once the first, coarse stage has ru
   ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation;
 * the default budget (``minutes`` 'auto', :func:`auto_minutes`) is costed at a reference speed, not
   timed: a coarse step takes its evaluated samples (counted in the calibration steps, which depend on
-  the capture alone) over ``reference_msps``, the coarse stage's speed on the project's 2-core
-  machine. A capture so gets the same grid and steps on every machine, loaded or idle, fast or slow,
-  and a resumed fit ends where an uninterrupted one would; the fit then runs at least ``min_steps``
-  steps (a small capture's budget buys fewer: the extra steps go to the grid the budget picked, as a
-  grid seen too few times stays hazy, not to a finer one);
+  the capture alone) over ``reference_msps``, the coarse stage's speed on the backend's reference
+  machine (:data:`BACKENDS`: the project's 2-core machine for llvm, an H100 for cuda; the budget and
+  the batch follow the backend too). A capture so gets the same grid and steps on every machine of a
+  backend, loaded or idle, fast or slow, and a resumed fit ends where an uninterrupted one would; the
+  fit then runs at least ``min_steps`` steps (a small capture's budget buys fewer: the extra steps go
+  to the grid the budget picked, as a grid seen too few times stays hazy, not to a finer one);
 * a budget given in minutes is this machine's wall clock: the seconds per step are timed, and at the
   start of every later stage and every ``REPLAN_EVERY`` steps the steps still to come are rescaled to
   the budget that is left (:func:`rescale`), with the seconds a step took in the stage just finished or
   running: the cost model only has to be right one stage ahead, and within the last stage not at all,
   so the fit ends on time on any machine and scene.
 """
+from dataclasses import dataclass
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -35,16 +39,47 @@ COST_EXPONENT = 1.25
 RESERVED = 0.2
 
 
-def auto_minutes(dataset):
-    """Default budget of a dataset: 2.5 minutes per million training pixels, between 1.5 and 10."""
+@dataclass(frozen=True)
+class Backend:
+    """What the default plan assumes of a Dr.Jit backend: the coarse stage's speed (M samples/s), the
+    budget per million training pixels and its bounds (minutes), and the rays of a step."""
+    reference_msps: float
+    minutes_per_mpx: float
+    minutes: tuple
+    batch_rays: int
+
+
+# llvm: the project's 2-core machine, idle (the 64^3 calibration steps: tabletop 18.4, random 4 17.9, fern 16.4,
+# statue 18.2, garden 20.0, horns 14.7 M samples/s; reports/notes.md). cuda: one H100 ran fern's plan 15x faster
+# than llvm, a step at 16k rays mostly host overhead (7.2 ms, 0.8 ms in kernels; issue #42), so larger batches
+# cost little more per step: 4x the rays at 15x the reference speed, and a budget a fifth as long.
+BACKENDS = {
+    "llvm": Backend(reference_msps=18.0, minutes_per_mpx=2.5, minutes=(1.5, 10.0), batch_rays=8192),
+    "cuda": Backend(reference_msps=270.0, minutes_per_mpx=0.5, minutes=(1.0, 5.0), batch_rays=32768),
+}
+
+
+def backend():
+    """The backend of the Mitsuba variant in use: 'cuda' or 'llvm' (scalar variants cannot fit)."""
+    return "cuda" if mi.variant().startswith("cuda") else "llvm"
+
+
+def auto_minutes(dataset, which="llvm"):
+    """Default budget of a dataset on backend ``which``: its minutes per million training pixels, within
+    its bounds (llvm: 2.5, between 1.5 and 10)."""
+    b = BACKENDS[which]
     pixels = len(dataset.train) * dataset.size[0] * dataset.size[1] / 1e6
-    return float(np.clip(2.5 * pixels, 1.5, 10.0))
+    return float(np.clip(b.minutes_per_mpx * pixels, *b.minutes))
 
 
-def capture_resolution(inputs, integrator, state, rays=1 << 14):
-    """Vertices along the scene box's longest side for which a voxel is ``pixels_per_voxel`` pixels wide,
-    in scene space, where training rays end (the 25th percentile of the footprints, the finer views
-    winning), rounded up to a multiple of 16; from the current fit's depths."""
+def capture_survey(inputs, integrator, state, rays=1 << 16):
+    """What the capture asks of the grid, from the current (coarse) fit's depths on ``rays`` training rays
+    at pixel centres: {"capture_resolution": vertices along the scene box's longest side for which a
+    voxel is ``pixels_per_voxel`` pixels wide in scene space where training rays end (the 25th percentile
+    of the footprints, the finer views winning), rounded up to a multiple of 16, or None where no ray
+    ends; "surface_cells": the cells of the current grid in which training rays end
+    (:func:`surface_cells`), on the grid of "surface_resolution"; "ray_hits": the fraction of rays that
+    end in one}."""
     from ..render.rays import render_rays
     cfg, bank, space = inputs.cfg, inputs.bank, inputs.space
     rng = np.random.default_rng([cfg.seed, 97])
@@ -55,7 +90,7 @@ def capture_resolution(inputs, integrator, state, rays=1 << 14):
     alpha, depth = np.array(out["full"][1]), np.array(out["full"][2])
     keep = alpha > 0.5
     if not keep.any():
-        return None
+        return {"capture_resolution": None, "surface_cells": None, "ray_hits": 0.0}
     focal = np.array([c.focal for c in bank.cams])[np.array(view)]
     o, d = np.array(o).T[keep], np.array(d).T[keep]
     z = depth[keep]
@@ -64,7 +99,23 @@ def capture_resolution(inputs, integrator, state, rays=1 << 14):
     scale = scene_scale(space, x, d)
     voxel = np.percentile(footprint * scale, 25)
     extent = float(np.max(state.hi - state.lo))
-    return int(np.clip(16 * np.ceil((extent / voxel + 1) / 16), 32, cfg.max_resolution))
+    resolution = int(np.clip(16 * np.ceil((extent / voxel + 1) / 16), 32, cfg.max_resolution))
+    current = max(state.fields["full"].shape)
+    cell = extent / (current - 1)
+    ends = np.floor((space.from_world_np(x) - state.lo) / cell).astype(np.int64)
+    counts = np.unique(ends, axis=0, return_counts=True)[1]
+    return {"capture_resolution": resolution, "surface_cells": surface_cells(counts),
+            "ray_hits": float(keep.mean()), "surface_resolution": int(current)}
+
+
+def surface_cells(counts):
+    """Effective number of cells rays end in, from the ray ends counted per cell (``counts``): the inverse
+    Simpson index 1 / sum_c p_c^2 of the cells' shares p_c, estimated without bias as
+    N (N - 1) / sum_c n_c (n_c - 1). S cells hit alike give S; it does not grow with the number of rays
+    drawn, as the count of distinct cells does where a few rays stray into a fog of cells."""
+    n = np.asarray(counts, np.float64)
+    total, pairs = n.sum(), np.sum(n * (n - 1))
+    return float(total * (total - 1) / pairs) if pairs > 0 else float(total)
 
 
 def scene_scale(space, x, d):
@@ -101,14 +152,26 @@ def stages(cfg, coarse, final):
     return list(zip(starts, levels))
 
 
-def affordable_resolution(cfg, coarse, seconds_per_step, budget_seconds, pixels):
-    """The finest resolution whose last stage (its share of the budget, stage_starts[-1] to the end)
-    still passes ``min_epochs`` times over the ``pixels`` training pixels, a step at resolution R costing
-    ``seconds_per_step`` (R / coarse)^COST_EXPONENT."""
+def affordable_resolution(cfg, coarse, seconds_per_step, budget_seconds, survey, pixels):
+    """The finest resolution R whose last stage (its share of the budget, stage_starts[-1] to the end)
+    still ends ``min_observations`` training rays in each cell where rays end, a step at resolution R
+    costing ``seconds_per_step`` (R / coarse)^COST_EXPONENT and surfaces holding
+    ``surface_cells`` (R / surface_resolution)^2 cells (``survey``: :func:`capture_survey`), and whose
+    surface cells are no more than the ``pixels`` training pixels that end on them over
+    ``pixels_per_voxel``^2 (a cell no pixel ends in has nothing to fit). Rays, not passes over the pixels,
+    are the currency: a capture with more views buys the same grid or a finer one.
+
+        steps(R) = share budget / (seconds (R / coarse)^e),   rays(R) = steps(R) batch hits
+        rays(R) / (cells (R / R_s)^2) >= min_observations
+        => R <= coarse (share budget batch hits R_s^2 / (seconds cells coarse^2 min_observations))^(1 / (e + 2))
+        cells (R / R_s)^2 <= pixels hits / pixels_per_voxel^2
+    """
     share = 1.0 - (cfg.stage_starts[-1] if cfg.stage_starts else 0.0)
-    steps = cfg.min_epochs * pixels / cfg.batch_rays
-    ratio = (share * budget_seconds / (steps * seconds_per_step)) ** (1.0 / COST_EXPONENT)
-    return int(max(coarse, 16 * np.floor(coarse * ratio / 16)))
+    rays = share * budget_seconds / seconds_per_step * cfg.batch_rays * survey["ray_hits"]
+    cells = survey["surface_cells"] * (coarse / survey["surface_resolution"]) ** 2  # at the coarse resolution
+    ratio = (rays / (cells * cfg.min_observations)) ** (1.0 / (COST_EXPONENT + 2.0))
+    seen = (pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5
+    return int(max(coarse, 16 * np.floor(coarse * min(ratio, seen) / 16)))
 
 
 def steps_for(plan_stages, seconds_per_step, budget_seconds):

@@ -70,7 +70,8 @@ from .schedule import (
     RESERVED,
     affordable_resolution,
     auto_minutes,
-    capture_resolution,
+    backend,
+    capture_survey,
     coarse_resolution,
     rescale,
     schedule_of,
@@ -86,6 +87,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     """Fit ``dataset``, checkpointing to the file ``checkpoint``. Returns the inputs and the final
     :class:`FitState` (fields, log, phase times). ``inpainter``: a 2D inpainter callable for the ``guided``
     and ``lift`` priors (:mod:`mi_voldis.inpaint2d`), instead of the one ``cfg.prior_inpainter`` names."""
+    cfg = cfg.for_backend(backend())
     inputs = FitInputs.of(dataset, cfg, checkpoint, progress)
     adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
     state = FitState.load(checkpoint, adam) if resume else None
@@ -265,13 +267,18 @@ def plan_schedule(inputs, state, integrator):
     """Freeze the full phase's schedule after the calibration steps (:mod:`mi_voldis.fit.schedule`)."""
     cfg = inputs.cfg
     coarse = coarse_resolution(cfg)
-    final = cfg.resolution if cfg.resolution != "auto" else capture_resolution(inputs, integrator, state)
-    final = final or cfg.max_resolution
+    survey = capture_survey(inputs, integrator, state) if cfg.resolution == "auto" else None
+    final = cfg.resolution if survey is None else survey["capture_resolution"]
+    if final is None:  # no training ray ends anywhere yet: a voxel per pixel of a view the box would fill
+        final = int(min(cfg.max_resolution, 16 * np.ceil(max(inputs.ds.size) / 16)))
     state.plan = {"capture_resolution": int(final)}
+    if survey is not None and survey["surface_cells"]:
+        state.plan.update(surface_cells=float(survey["surface_cells"]), surface_resolution=survey["surface_resolution"],
+                          ray_hits=survey["ray_hits"])
     if cfg.steps_full is None:
         first = cfg.calibration_steps // 5  # past the first steps (kernels compiling)
         rows = [r for r in state.log if r["step"] > first and "test_psnr" not in r]
-        minutes = auto_minutes(inputs.ds) if cfg.minutes == "auto" else cfg.minutes
+        minutes = auto_minutes(inputs.ds, backend()) if cfg.minutes == "auto" else cfg.minutes
         if cfg.minutes == "auto":  # costed at the reference speed: the same plan on every machine, loaded or not
             seconds = float(np.median([r["samples"] for r in rows])) / (cfg.reference_msps * 1e6)
             spent = cfg.calibration_steps * seconds
@@ -282,8 +289,8 @@ def plan_schedule(inputs, state, integrator):
         budget = minutes * 60.0 * (1.0 - RESERVED) - spent
         state.plan.update(minutes=float(minutes), coarse_step_seconds=seconds,
                           budget_seconds=minutes * 60.0 * (1.0 - RESERVED))
-        if cfg.resolution == "auto":
-            state.plan["affordable_resolution"] = int(affordable_resolution(cfg, coarse, seconds, budget,
+        if survey is not None and survey["surface_cells"]:
+            state.plan["affordable_resolution"] = int(affordable_resolution(cfg, coarse, seconds, budget, survey,
                                                                             inputs.bank.pixels))
             final = min(final, state.plan["affordable_resolution"])
     state.plan["final_resolution"] = int(final)
