@@ -22,6 +22,7 @@ import mitsuba as mi
 import numpy as np
 
 from .activations import sigmoid, softplus
+from .io.scene_xml import sensor_xml
 from .io.vol import write_vol
 from .transforms import apply_point
 
@@ -82,8 +83,14 @@ def export_dense(field, space, lo, hi, resolution, slab_vertices=1 << 21):
 SCENE = """<scene version="3.0.0">
     <!-- {role} field of {source}, resampled by mi_voldis.dense_export: sigma_t per world unit,
          albedo = the view-independent colour. A radiance field emits rather than scatters: this
-         medium is an approximation for Mitsuba's own volumetric path tracers. -->
-    <integrator type="volpath"/>
+         medium is an approximation for Mitsuba's own volumetric path tracers. A complete scene:
+         `mitsuba {role}_gridvolume.xml` or mi.render(mi.load_file(...)) renders the sensor below
+         ({camera}). Paths end after {max_depth} scattering events: with albedos near 1 in dense
+         media unbounded paths make a render take minutes. -->
+    <integrator type="volpath">
+        <integer name="max_depth" value="{max_depth}"/>
+    </integrator>
+    {sensor}
     <emitter type="constant"/>
     <shape type="cube">
         <transform name="to_world">
@@ -107,10 +114,44 @@ SCENE = """<scene version="3.0.0">
 """
 
 
-def write_export(folder, role, sigma, albedo, lo, hi, source=""):
+MAX_DEPTH = 8  # volpath's scattering events per path (module docstring of the written scene)
+SPP = 16  # the written sensor's samples per pixel
+
+
+def source_sensor(scene_file, spp=SPP):
+    """The first ``<sensor>`` of ``scene_file`` (a run's or task's scene: the first held-out camera) as
+    XML with ``spp`` samples per pixel, or None where it has none."""
+    import xml.etree.ElementTree as ET
+    try:
+        sensor = ET.parse(scene_file).getroot().find("sensor")
+    except (OSError, ET.ParseError) as e:
+        raise ValueError(f"{scene_file}: cannot read the scene ({e})") from None
+    if sensor is None:
+        return None
+    for count in sensor.iter("integer"):
+        if count.get("name") == "sample_count":
+            count.set("value", str(spp))
+    return ET.tostring(sensor, encoding="unicode").strip()
+
+
+def region_sensor(lo, hi, spp=SPP, width=160, height=120):
+    """A camera that sees the whole region ``lo``..``hi`` from its -z side, a little above (Mitsuba's
+    +y up), as XML: for a source scene without sensors."""
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
+    fov = 45.0
+    distance = radius / np.sin(np.radians(fov) / 2) * 1.05  # the bounding sphere inside the horizontal view
+    origin = centre + distance * np.array([0.0, 0.3, -1.0]) / np.linalg.norm([0.0, 0.3, -1.0])
+    to_world = mi.ScalarTransform4f().look_at(origin.tolist(), centre.tolist(), [0.0, 1.0, 0.0]).matrix
+    return sensor_xml(np.array(to_world, np.float64), fov, width, height, spp)
+
+
+def write_export(folder, role, sigma, albedo, lo, hi, source="", sensor=None):
     """Write ``<role>_sigma_t.vol``, ``<role>_albedo.vol`` (header box = the region) and
-    ``<role>_gridvolume.xml`` (a cube holding a ``heterogeneous`` medium over them) into ``folder``;
-    returns the scene file's path."""
+    ``<role>_gridvolume.xml`` (a cube holding a ``heterogeneous`` medium over them, a ``volpath``
+    integrator with at most :data:`MAX_DEPTH` scattering events, a constant environment and a sensor)
+    into ``folder``; returns the scene file's path. ``sensor``: the sensor's XML (:func:`source_sensor`);
+    default :func:`region_sensor`."""
     os.makedirs(folder, exist_ok=True)
     write_vol(os.path.join(folder, f"{role}_sigma_t.vol"), np.clip(sigma, 0.0, None), lo, hi)
     write_vol(os.path.join(folder, f"{role}_albedo.vol"), np.clip(albedo, 0.0, 1.0), lo, hi)
@@ -118,7 +159,9 @@ def write_export(folder, role, sigma, albedo, lo, hi, source=""):
     path = os.path.join(folder, f"{role}_gridvolume.xml")
     fmt = ", ".join
     with open(path, "w") as f:
-        f.write(SCENE.format(role=role, source=source, half=fmt(f"{v:.9g}" for v in (hi - lo) / 2),
+        f.write(SCENE.format(role=role, source=source, max_depth=MAX_DEPTH,
+                             camera="the source scene's first camera" if sensor else "a view of the whole region",
+                             sensor=sensor or region_sensor(lo, hi), half=fmt(f"{v:.9g}" for v in (hi - lo) / 2),
                              center=fmt(f"{v:.9g}" for v in (hi + lo) / 2),
                              size=fmt(f"{v:.9g}" for v in hi - lo), lo=fmt(f"{v:.9g}" for v in lo)))
     return path

@@ -4,7 +4,8 @@
                                  [--resolution N | NX,NY,NZ]
 
 Writes DIR/<field>_sigma_t.vol (density per world unit), DIR/<field>_albedo.vol (the view-independent
-colour) and DIR/<field>_gridvolume.xml (a cube holding a heterogeneous medium over them; see
+colour) and DIR/<field>_gridvolume.xml (a cube holding a heterogeneous medium over them, volpath, a
+constant environment and the scene's first camera, a complete scene for `mitsuba` or mi.render; see
 mi_voldis/dense_export.py for how contracted and NDC densities are converted). Default region: the
 field's box (world space) or the inner cube of a contracted space; NDC scenes need --region. Default
 resolution: 128 values along the region's longest side, the others in proportion. DIR is written
@@ -44,7 +45,7 @@ def main(argv=None):
     os.environ["MI_VOLDIS_VARIANT"] = args.variant  # chosen before the first import of mi_voldis
     import numpy as np
 
-    from mi_voldis.dense_export import export_dense, write_export
+    from mi_voldis.dense_export import export_dense, source_sensor, write_export
     from mi_voldis.io.run_folder import check_output, scene_files, staged
     from mi_voldis.scene import load_scene
 
@@ -77,7 +78,8 @@ def main(argv=None):
         resolution = args.resolution
     sigma, albedo = export_dense(field, space, lo, hi, resolution)
     with staged(args.out, inputs=inputs, made_by="export_vol") as stage:
-        path = write_export(stage, args.field, sigma, albedo, lo, hi, source=os.path.abspath(args.scene))
+        path = write_export(stage, args.field, sigma, albedo, lo, hi, source=os.path.abspath(args.scene),
+                            sensor=source_sensor(args.scene))
     if not args.quiet:
         print(os.path.join(args.out, os.path.relpath(path, stage)))
 

@@ -71,8 +71,22 @@ def property_xml(key, value):
     return f'<{kind} name="{key}" value={quoteattr(text)}/>'
 
 
+# What a written scene renders, at its top: Mitsuba's own tools give the integrator's raw sums, which
+# differ from the EXR layers the scripts write (XML comments may not hold "--").
+ABOUT = """<!-- A mi-voldis scene. Its plugins (radiance_field, voldis) are Python: load it after
+     `import mi_voldis` (mi.load_file), not with the `mitsuba` command, which cannot find them;
+     the command-line equivalent is `voldis-render SCENE.xml` (scripts/render.py in a checkout).
+     mi.render(scene) returns the integrator's raw output, not the EXR layers the scripts write:
+     channels 0-2 are the layer `mode` names ('composite': the `composition` rule, 'paper' = the
+     paper's Eq. 5) as premultiplied sums of the fields' display-encoded (sRGB) colour, then the
+     AOVs A, depth.Z, <layer>.R/G/B/A/Z for full, bg, fg (and res) and fg.coverage, where fg is the
+     paper's signed w_fg = w_full - w_bg. mi_voldis.export.render_channels names the channels and
+     mi_voldis.compositing.composite_channels turns them into the EXR layers: linear light,
+     premultiplied, 0 <= RGB <= A, fg a matte with fg over bg = full. -->"""
+
+
 def write_scene(path, fields, properties=None, sensors=()):
-    """Write a scene with a ``voldis`` integrator.
+    """Write a scene with a ``voldis`` integrator, headed by :data:`ABOUT`.
 
     ``fields``: role -> ``<medium>`` body from :func:`save_field`; ``properties``: integrator
     properties as for ``mi.load_dict`` (see :func:`mi_voldis.scene.build_integrator`); ``sensors``:
@@ -80,7 +94,7 @@ def write_scene(path, fields, properties=None, sensors=()):
     body = [property_xml(key, value) for key, value in (properties or {}).items()]
     for role, inner in fields.items():
         body.append(f'<medium type="radiance_field" name="{role}" id="{role}">{inner}</medium>')
-    xml = ['<scene version="3.0.0">', '<integrator type="voldis" id="integrator">', *body, '</integrator>',
+    xml = ['<scene version="3.0.0">', ABOUT, '<integrator type="voldis" id="integrator">', *body, '</integrator>',
            *sensors, '</scene>', '']
     tmp = f"{path}.tmp"
     with open(tmp, "w") as f:
