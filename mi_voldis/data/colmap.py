@@ -22,7 +22,7 @@ import numpy as np
 
 from ..transforms import quaternion_to_rotation
 from .conventions import camera_from_intrinsics
-from .images import check_sizes, is_linear, mask_folder_paths, read_effects, read_image, read_masks
+from .images import alpha_note, check_sizes, is_linear, mask_folder_paths, read_effects, read_image, read_masks
 from .lens import COLMAP_MODELS, LensError, lens_from_colmap
 from .scene_box import capture_box
 from .types import Dataset, DatasetError
@@ -168,10 +168,10 @@ def load_colmap(root, holdout=8, factor=None):
     if not os.path.isdir(image_dir):
         raise DatasetError(f"{image_dir}: no such image folder")
     paths = [os.path.join(image_dir, name) for name, *_ in records]
-    images = [read_image(p) for p in paths]
+    images = [read_image(p, background=None) for p in paths]
     check_sizes(images, paths)
     h, w = images[0].shape[:2]
-    undistorters, cameras, notes = {}, [], []
+    undistorters, cameras, notes = {}, [], alpha_note(paths)
     for k, (name, q, t, cam_id) in enumerate(records):
         if cam_id not in cams:
             raise DatasetError(f"{folder}: image {name} refers to camera {cam_id}, which is not in the model")

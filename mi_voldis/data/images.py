@@ -4,6 +4,12 @@ Fields are fitted to display-encoded (sRGB) colour, as the photographs are store
 hold *linear* light: :func:`read_image` encodes them with the sRGB curve
 (after compositing RGBA over the background in linear light), clipping values above 1, and says so
 through :func:`is_linear` so that a loader can record the input's colour space.
+
+Read as they are: CMYK (and YCbCr, Lab, HSV) JPEGs are converted to RGB, palette images expanded; an
+EXR photo needs colour channels (``R, G, B`` or ``Y``: an EXR holding only ``Z`` is a depth map, not a
+photo); alpha is composited over a background colour only where the loader asks for it
+(transforms.json datasets, Blender's convention), and an image transparent at every pixel is refused.
+Masks are read by their value range (:func:`read_mask`).
 """
 import os
 
@@ -16,6 +22,8 @@ from ..io.images import linear_to_srgb, srgb_to_linear
 from .types import DatasetError
 
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".exr")
+LOSSY_EXTENSIONS = (".jpg", ".jpeg")
+COLOUR_MODES = ("CMYK", "YCbCr", "LAB", "HSV")  # Pillow modes whose 3 or 4 channels are not R, G, B[, A]
 
 
 def has_alpha(path):
@@ -28,13 +36,25 @@ def has_alpha(path):
         return False
 
 
+def alpha_note(paths):
+    """The notes of a capture (photos read as their RGB, :func:`read_image` with no background) whose
+    images have an alpha channel: one line saying it is left out."""
+    with_alpha = [p for p in paths if has_alpha(p)]
+    if not with_alpha:
+        return []
+    return [f"{len(with_alpha)} of {len(paths)} photos have an alpha channel (the first: {with_alpha[0]}); a capture's "
+            "photos are read as their RGB, alpha left out (only transforms.json datasets composite RGBA over "
+            "their background_color)"]
+
+
 def is_linear(path):
     """True for files that store linear light (floating-point pixels: EXR)."""
     return path.lower().endswith(".exr")
 
 
-def _read(path, what):
-    """Pixels as float32 (H, W) or (H, W, C) in the file's own encoding."""
+def _read(path, what, raw=False):
+    """Pixels as float32 (H, W) or (H, W, C) in the file's own encoding; ``raw``: as stored (integer
+    files keep their integer values)."""
     if not os.path.isfile(path):
         raise DatasetError(f"{path}: {what} file is missing")
     if is_linear(path):
@@ -44,25 +64,30 @@ def _read(path, what):
             raise DatasetError(str(e)) from None
         return _exr_stack(channels, path, what)
     try:
-        img = iio.imread(path)
+        mode = iio.immeta(path).get("mode")
+        # imageio hands CMYK's four channels over as they are, which would read as RGBA
+        img = iio.imread(path, mode="RGB") if mode in COLOUR_MODES else iio.imread(path)
     except Exception as e:  # imageio raises many types for broken files
         raise DatasetError(f"{path}: unreadable or truncated {what} ({type(e).__name__}: {e})") from None
-    return _to_float(img, path)
+    return np.asarray(img) if raw else _to_float(img, path)
 
 
 def _exr_stack(channels, path, what):
-    """(H, W, C) of an EXR's main image: R, G, B[, A], or Y[, A], or its single channel."""
+    """(H, W, C) of an EXR's main image: R, G, B[, A], or Y[, A]; a mask or coverage may also be its
+    single channel, whatever its name."""
     for names in (("R", "G", "B", "A"), ("R", "G", "B"), ("Y", "A"), ("Y",)):
         if all(n in channels for n in names):
             return np.stack([channels[n] for n in names], axis=-1).astype(np.float32)
-    if len(channels) == 1:
+    if len(channels) == 1 and what != "image":
         return next(iter(channels.values())).astype(np.float32)
     raise DatasetError(f"{path}: the EXR {what} has no R, G, B or Y channels (it has {', '.join(sorted(channels))})")
 
 
 def read_image(path, background=(1.0, 1.0, 1.0)):
     """RGB float32 image in [0, 1], display-encoded; RGBA is composited over ``background`` (display
-    values). Linear files (EXR) are composited in linear light, then encoded with the sRGB curve."""
+    values), or its alpha left out when ``background`` is None (a capture's photos: RGB as stored).
+    Linear files (EXR) are composited in linear light, then encoded with the sRGB curve. An image whose
+    alpha is 0 at every pixel is refused: it holds no picture, only the background colour."""
     img = _read(path, "image")
     if img.ndim == 2:
         img = np.repeat(img[..., None], 3, axis=2)
@@ -73,7 +98,9 @@ def read_image(path, background=(1.0, 1.0, 1.0)):
     if not np.all(np.isfinite(img)):
         raise DatasetError(f"{path}: the image has NaN or infinite pixels")
     linear = is_linear(path)
-    if img.shape[2] == 4:
+    if img.shape[2] == 4 and not np.any(img[..., 3] > 0):
+        raise DatasetError(f"{path}: every pixel is transparent (alpha 0): the image holds no picture")
+    if img.shape[2] == 4 and background is not None:
         a = np.clip(img[..., 3:4], 0.0, 1.0)
         bg = np.asarray(background, np.float32)  # a display colour
         if linear:  # EXR colour is premultiplied by alpha
@@ -86,20 +113,39 @@ def read_image(path, background=(1.0, 1.0, 1.0)):
     return np.ascontiguousarray(img, dtype=np.float32)
 
 
-def read_mask(path, rule="nonzero"):
-    """Boolean object mask. ``rule`` 'nonzero': any value > 0 is the object (SPIn-NeRF labels);
-    'white': values above half the range are the object (white = object). A matte stored in an alpha
-    channel (RGBA or grey + alpha whose alpha is not constant) is read from the alpha channel; EXR
-    masks are read as they are stored (coverage in [0, 1])."""
-    m = _read(path, "mask")
+def mask_values(path):
+    """(H, W) float mask values in [0, 1] of the file's range (1 = 255 in 8 bits, 65535 in 16, 1.0 in
+    EXR), and True when the file is a 0/1 mask (integer pixels whose largest value is 1). A matte stored
+    in an alpha channel (RGBA or grey + alpha whose alpha is not constant) is read from the alpha channel;
+    colour masks from their brightest channel."""
+    m = _read(path, "mask", raw=True)
     if m.ndim == 3:
         if m.shape[2] in (2, 4) and np.ptp(m[..., -1]) > 0:
             m = m[..., -1]
         else:
             m = m[..., :3].max(axis=2) if m.shape[2] != 2 else m[..., 0]
+    binary = np.issubdtype(m.dtype, np.integer) and m.max() == 1
+    m = m.astype(np.float32) if binary else _to_float(m, path)
     if not np.all(np.isfinite(m)):
         raise DatasetError(f"{path}: the mask has NaN or infinite pixels")
-    return m > 0 if rule == "nonzero" else m > 0.5
+    return m, binary
+
+
+def read_mask(path, rule="nonzero"):
+    """Boolean object mask, read by its value range (:func:`mask_values`). ``rule`` 'nonzero': any value
+    > 0 is the object (SPIn-NeRF labels); 'white': values of at least half the range are the object
+    (white = object; an EXR's coverage of at least 0.5). A 0/1 mask is the object where it is 1. JPEG
+    masks are lossy, their edges ringing with small values: they are thresholded at half the range
+    under either rule, so they do not grow. A mask whose values are not 0 somewhere but never reach
+    half the range (say, coverage 0.3 everywhere) is refused rather than read as empty."""
+    m, binary = mask_values(path)
+    if binary or (rule == "nonzero" and not path.lower().endswith(LOSSY_EXTENSIONS)):
+        return m > 0
+    obj = m >= 0.5
+    if not obj.any() and m.max() > 0:
+        raise DatasetError(f"{path}: the mask's largest value is {m.max():.3g} of its range 1: no pixel reaches half "
+                           "of it, so it marks no object pixel (masks are white, or 1, where the object is)")
+    return obj
 
 
 def read_coverage(path):

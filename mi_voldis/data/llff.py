@@ -14,7 +14,16 @@ import os
 import numpy as np
 
 from .conventions import camera_from_intrinsics, llff_to_mitsuba, mitsuba_to_llff, rigid_error
-from .images import check_sizes, is_linear, list_images, mask_folder_paths, read_effects, read_image, read_masks
+from .images import (
+    alpha_note,
+    check_sizes,
+    is_linear,
+    list_images,
+    mask_folder_paths,
+    read_effects,
+    read_image,
+    read_masks,
+)
 from .scene_box import NEAR_FRACTION, capture_box
 from .types import Dataset, DatasetError
 
@@ -69,7 +78,7 @@ def load_llff(root, factor=None, holdout=8):
     if len(names) != len(data):
         raise DatasetError(f"{path}: {len(data)} poses but {len(names)} images in {folder}")
     paths = [os.path.join(folder, n) for n in names]
-    images = [read_image(p) for p in paths]
+    images = [read_image(p, background=None) for p in paths]
     check_sizes(images, paths)
     h, w = images[0].shape[:2]
     poses = data[:, :15].reshape(-1, 3, 5)
@@ -83,15 +92,21 @@ def load_llff(root, factor=None, holdout=8):
                                f"differs from the {w}x{h} images in {folder}")
         cameras.append(camera_from_intrinsics(llff_to_mitsuba(pose), w, h, f0 * w / w0))
     bounds = data[:, 15:17]
-    notes = []
+    notes = alpha_note(paths)
     split = np.array(["test" if holdout and k % holdout == 0 else "train" for k in range(len(names))])
-    masks = masked = backgrounds = None
+    masks = masked = backgrounds = split_from = None
     found = mask_paths(root, folder, paths)
     if found is not None:
         rule, train_paths, test_paths = found
         is_test = np.array([p is not None for p in test_paths])
+        both = [k for k, (m, t) in enumerate(zip(train_paths, test_paths)) if m is not None and t is not None]
+        if both:  # test_label/ wins, as in SPIn-NeRF's own layout, where label/ may hold every view
+            notes.append(f"{len(both)} views have a mask in both label/ and test_label/ (the first: {names[both[0]]}): "
+                         "they are test views, photographed without the object (their photos are the background's "
+                         "ground truth); their label/ masks are not used")
         if is_test.any():  # SPIn-NeRF: the test views are the photos taken without the object
             split = np.where(is_test, "test", "train")
+            split_from = os.path.dirname(next(p for p in test_paths if p is not None)) + "/ (SPIn-NeRF's test views)"
             backgrounds = np.where(is_test[:, None, None, None], np.stack(images), np.nan).astype(np.float32)
             notes.append(f"{int(is_test.sum())} views with test_label/ masks are test views: their photos are "
                          "the background without the object")
@@ -102,7 +117,7 @@ def load_llff(root, factor=None, holdout=8):
     ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names,
                  images=np.stack(images), cameras=cameras, split=split, box=box, masks=masks, masked=masked,
                  effects=effects, near_far=bounds, backgrounds=backgrounds,
-                 meta={"format": "llff", "image_folder": folder, "notes": notes,
+                 meta={"format": "llff", "image_folder": folder, "notes": notes, "split_from": split_from,
                        "color_space": "linear (encoded with the sRGB curve)" if is_linear(paths[0]) else "sRGB"})
     return ds
 

@@ -72,13 +72,37 @@ def json_files(root):
 
 def _load_json(path):
     try:
-        with open(path) as f:
+        with open(path, encoding="utf-8") as f:
             meta = json.load(f)
+    except UnicodeDecodeError as e:
+        raise DatasetError(f"{path}: not UTF-8 text, as JSON must be (byte {e.start}: {e.reason}); save it as "
+                           "UTF-8") from None
     except (OSError, json.JSONDecodeError) as e:
         raise DatasetError(f"{path}: cannot read JSON ({e})") from None
     if not isinstance(meta, dict) or not isinstance(meta.get("frames"), list) or not meta["frames"]:
         raise DatasetError(f"{path}: expected an object with a non-empty 'frames' list")
     return meta
+
+
+def _number(value, key, path, where=""):
+    """``value`` as a float when it is a finite JSON number; else one line naming the file and key."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+        raise DatasetError(f"{path}: {where}'{key}' must be a finite number, got {json.dumps(value)}")
+    return float(value)
+
+
+def _matrix(value, key, path, shapes, where=""):
+    """``value`` as a float64 array of one of ``shapes`` with finite entries; else one line naming it."""
+    try:
+        m = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        m = None
+    if m is None or m.shape not in shapes or not np.all(np.isfinite(m)):
+        want = " or ".join("x".join(map(str, s)) for s in shapes)
+        want = f"a list of {want} finite numbers" if len(shapes[0]) == 1 else f"a {want} matrix of finite numbers"
+        got = "non-numeric" if m is None else "x".join(map(str, m.shape)) if m.shape not in shapes else "non-finite"
+        raise DatasetError(f"{path}: {where}'{key}' must be {want}, got {got}")
+    return m
 
 
 def _resolve(base, rel, what, path):
@@ -139,13 +163,22 @@ def load_transforms(root, holdout=8, factor=None):
     files = json_files(root)
     metas = [(_load_json(p), p, s) for p, s in files]
     top = metas[0][0]
-    background = np.asarray(top.get("background_color", (1.0, 1.0, 1.0)), np.float32)
+    background = _matrix(top.get("background_color", (1.0, 1.0, 1.0)), "background_color", metas[0][1], ((3,),))
+    if not np.all((background >= 0) & (background <= 1)):
+        raise DatasetError(f"{metas[0][1]}: 'background_color' must be 3 numbers in [0, 1], got {background.tolist()}")
+    background = background.astype(np.float32)
     frames = []
     for meta, path, split in metas:
         for k, frame in enumerate(meta["frames"]):
+            if not isinstance(frame, dict):
+                raise DatasetError(f"{path}: frame {k} must be an object with 'file_path' and 'transform_matrix'")
             for key in ("file_path", "transform_matrix"):
                 if key not in frame:
                     raise DatasetError(f"{path}: frame {k} has no '{key}'")
+            for key in ("file_path", "mask_path", "object_mask_path", "effect_mask_path", "coverage_path",
+                        "background_path", "moved_path"):
+                if key in frame and not (isinstance(frame[key], str) and frame[key]):
+                    raise DatasetError(f"{path}: frame {k}: '{key}' must be a file path, got {json.dumps(frame[key])}")
             frames.append((frame, path, split or frame.get("split")))
     base = {path: os.path.dirname(path) for _, path, _ in metas}
     frames, listed = _split_lists(top, metas[0][1], frames, base)
@@ -160,6 +193,9 @@ def load_transforms(root, holdout=8, factor=None):
     lenses, resamplers = {}, []
     for frame, path, _ in frames:
         d = {key: (frame if key in frame else top)[key] for key in INTRINSIC_KEYS if key in frame or key in top}
+        for key, value in d.items():
+            if key != "camera_model":
+                d[key] = _number(value, key, path, "frame " if key in frame else "")
         tag = json.dumps(d, sort_keys=True)
         if tag not in lenses:
             lenses[tag] = _lens(d, path, w, h, factor)
@@ -171,9 +207,7 @@ def load_transforms(root, holdout=8, factor=None):
                      "lens model)")
     for k, (frame, path, split) in enumerate(frames):
         fx, cx, cy = resamplers[k][0]
-        m = np.asarray(frame["transform_matrix"], dtype=np.float64)
-        if m.shape not in ((4, 4), (3, 4)) or not np.all(np.isfinite(m)):
-            raise DatasetError(f"{path}: frame {k} ({names[k]}) has a non-finite or malformed transform_matrix")
+        m = _matrix(frame["transform_matrix"], "transform_matrix", path, ((4, 4), (3, 4)), f"frame {k} ({names[k]}): ")
         to_world = opengl_to_mitsuba(m)
         if rigid_error(to_world) > 1e-3:
             raise DatasetError(f"{path}: frame {k} ({names[k]}) transform_matrix is not a rigid motion")
@@ -181,10 +215,14 @@ def load_transforms(root, holdout=8, factor=None):
         if split not in (None, "train", "test"):
             raise DatasetError(f"{path}: frame {k} has split '{split}' (expected 'train' or 'test')")
         splits.append(split)
+    split_from = (" and ".join(os.path.basename(p) for p, _ in files) if files[0][1] else
+                  f"the frames' 'split' keys in {files[0][0]}")
     if any(s is None for s in splits):
         splits = ["test" if holdout and k % holdout == 0 else "train" for k in range(len(frames))]
+        split_from = None
     if listed:
         notes.append(listed)
+        split_from = f"the file lists in {files[0][0]} ({listed})"
     undistort = [r[1] for r in resamplers]
     masks, masked = _masks(root, frames, base, paths, (h, w), factor, undistort, notes)
     ignore = _ignore(root, frames, base, (h, w), factor, undistort, notes)
@@ -192,20 +230,25 @@ def load_transforms(root, holdout=8, factor=None):
     ds = Dataset(name=os.path.basename(os.path.normpath(root)), root=root, names=names, images=np.stack(images),
                  cameras=cameras, split=np.array(splits), box=None, masks=masks, masked=masked, effects=effects,
                  ignore=ignore, meta={"format": "transforms", "files": [p for p, _ in files], "notes": notes,
+                                      "split_from": split_from,
                        "color_space": "linear (encoded with the sRGB curve)" if is_linear(paths[0]) else "sRGB"})
-    if has_alpha(paths[0]):  # RGBA composited over a known colour: what rays see beyond the scene
+    if any(has_alpha(p) for p in paths):  # RGBA composited over a known colour: what rays see beyond the scene
         ds.meta["background_color"] = background.tolist()
+        notes.append(f"RGBA images composited over background_color {background.tolist()} (Blender's convention: "
+                     "alpha 0 is the empty space around the scene)")
     ds.coverage = _optional(frames, base, "coverage_path", read_coverage, (h, w), undistort)
     ds.backgrounds = _optional(frames, base, "background_path", lambda p: read_image(p, background), (h, w), undistort)
     ds.moved = _optional(frames, base, "moved_path", lambda p: read_image(p, background), (h, w), undistort)
     if "moved_transform" in top:
-        ds.moved_transform = np.asarray(top["moved_transform"], np.float64)
+        ds.moved_transform = _matrix(top["moved_transform"], "moved_transform", metas[0][1], ((4, 4),))
     if "applied_transform" in top:
         applied = np.eye(4)
-        applied[:3, :4] = np.asarray(top["applied_transform"], np.float64)[:3, :4]
+        applied[:3, :4] = _matrix(top["applied_transform"], "applied_transform", metas[0][1], ((3, 4), (4, 4)))[:3, :4]
         ds.meta["applied_transform"] = applied.tolist()
     if "applied_scale" in top:
-        ds.meta["applied_scale"] = float(top["applied_scale"])
+        ds.meta["applied_scale"] = _number(top["applied_scale"], "applied_scale", metas[0][1])
+        if ds.meta["applied_scale"] <= 0:
+            raise DatasetError(f"{metas[0][1]}: 'applied_scale' must be > 0, got {ds.meta['applied_scale']}")
     if "ply_file_path" in top:
         ds.points = read_ply(_resolve(base[metas[0][1]], top["ply_file_path"], "ply_file_path", metas[0][1]))
     ds.box, ds.near_far = _box(top, cameras, metas[0][1], ds.points, notes)
@@ -328,8 +371,10 @@ def _box(top, cameras, path, points, notes):
     """(scene box, near/far bounds or None): :func:`~mi_voldis.data.scene_box.capture_box`."""
     aabb = None
     if "aabb" in top:
-        aabb = np.asarray(top["aabb"], np.float64)
-        if aabb.shape != (2, 3) or not np.all(aabb[1] > aabb[0]):
+        aabb = _matrix(top["aabb"], "aabb", path, ((2, 3),))
+        if not np.all(aabb[1] > aabb[0]):
             raise DatasetError(f"{path}: 'aabb' must be [[x0, y0, z0], [x1, y1, z1]] with x1 > x0 etc.")
-    return capture_box(cameras, points, path, notes, top.get("forward_facing"), float(top.get("near", 0.0)),
-                       float(top.get("far", 0.0)), aabb)
+    near, far = (_number(top.get(key, 0.0), key, path) for key in ("near", "far"))
+    if "forward_facing" in top and not isinstance(top["forward_facing"], bool):
+        raise DatasetError(f"{path}: 'forward_facing' must be true or false, got {json.dumps(top['forward_facing'])}")
+    return capture_box(cameras, points, path, notes, top.get("forward_facing"), near, far, aabb)
