@@ -21,6 +21,7 @@ from .tasks import run_task
 
 EDITS = (("removal", {}), ("transform", {"use_dataset_transform": True}), ("camouflage", {}), ("nonneg", {}))
 TURNTABLE_FRAMES = 36
+TURNTABLE_LABELS = ("moved", "original")
 
 
 def run_demo(out, scene, spp=128, progress=True, composition=None):
@@ -84,7 +85,8 @@ def _rule_note(m, given):
 
 
 def _turntable(run, out, name):
-    """An orbit of the moved object (left) beside the original scene (right: the full field), as a video."""
+    """An orbit of the moved object (left) beside the original scene (right: the full field), as a video;
+    each panel captioned (:data:`TURNTABLE_LABELS`) on a white band above it."""
     from .api import Edit, load_run
     from .camera_paths import make_path
     from .video import write_video
@@ -95,7 +97,7 @@ def _turntable(run, out, name):
     for cam in cams:
         a = moved.render(cam, layers=("composite",), linear=False)["composite"]
         b = fitted.render(cam, layers=("full",), linear=False)["full"]  # the original: the full field
-        frames.append(np.concatenate([_display(a), _display(b)], axis=1))
+        frames.append(contact_sheet([_display(a), _display(b)], labels=TURNTABLE_LABELS))
     return write_video(os.path.join(out, f"{name}_turntable"), frames, fps=12)
 
 

@@ -45,11 +45,12 @@ def previews(linear, layers):
     return out
 
 
-def write_layers(directory, stem, channels, layers=PREVIEW_LAYERS, camera=None, command=None, pngs=True):
+def write_layers(directory, stem, channels, layers=PREVIEW_LAYERS, camera=None, command=None, pngs=True,
+                 title=None):
     """Write ``<stem>.exr`` (composited channels, header with the camera and ``command``, by default
     this process's command line) and, with ``pngs``, ``<stem>_<layer>.png`` previews and a contact
-    sheet ``<stem>_sheet.png`` (main, layers, depth). ``channels``: the integrator's raw channels.
-    Returns the EXR path."""
+    sheet ``<stem>_sheet.png`` (main, layers, depth; the main image captioned ``title``, e.g. a task's
+    name, else "image"). ``channels``: the integrator's raw channels. Returns the EXR path."""
     os.makedirs(directory, exist_ok=True)
     exr = os.path.join(directory, f"{stem}.exr")
     linear = composite_channels(channels)
@@ -58,8 +59,8 @@ def write_layers(directory, stem, channels, layers=PREVIEW_LAYERS, camera=None, 
         images = previews(linear, [lay for lay in layers if f"{lay}.R" in linear])
         for name, image in images.items():
             write_png(os.path.join(directory, f"{stem}_{name}.png"), image)
-        write_png(os.path.join(directory, f"{stem}_sheet.png"),
-                  contact_sheet(list(images.values()), labels=[SHEET_LABELS.get(k, k) for k in images]))
+        labels = [title if k == "composite" and title else SHEET_LABELS.get(k, k) for k in images]
+        write_png(os.path.join(directory, f"{stem}_sheet.png"), contact_sheet(list(images.values()), labels=labels))
     return exr
 
 

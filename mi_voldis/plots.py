@@ -2,6 +2,9 @@
 
 # what each phase's loss is, for the legend (phases are the ``desc`` of :func:`mi_voldis.optim.loop.optimize`)
 PHASE_LOSS = {"bg refit": "background: L2 outside the masks", "full + bg": "full + background (joint)"}
+# a fit logs held-out PSNR on its first `eval_views` test views while it runs, and its metrics.json scores
+# every test view at the end: the legend says so, as the two numbers differ
+HELD_OUT_LABEL = "held-out (first eval_views test views; metrics.json: all test views)"
 
 
 def plot_log(path, log, title):
@@ -10,7 +13,7 @@ def plot_log(path, log, title):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    psnr_keys = (("psnr", "train batch (full)"), ("psnr_bg", "train batch (bg)"), ("test_psnr", "held-out"))
+    psnr_keys = (("psnr", "train batch (full)"), ("psnr_bg", "train batch (bg)"), ("test_psnr", HELD_OUT_LABEL))
     has_psnr = any(key in r for r in log for key, _ in psnr_keys)
     fig, axes = plt.subplots(1, 2 if has_psnr else 1, figsize=(10 if has_psnr else 5.5, 3.6), squeeze=False)
     ax = axes[0]

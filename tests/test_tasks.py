@@ -232,4 +232,8 @@ def test_demo_picks_the_best_rule_and_renders_a_turntable(tiny_run, tmp_path, mo
     assert os.path.getsize(video) > 0 and video.endswith((".mp4", ".gif"))
     import imageio.v3 as iio
     frames = iio.imread(video, index=None)
-    assert frames.shape[0] == 3 and frames.shape[2] == 2 * 32  # moved beside the original
+    assert frames.shape[0] == 3 and frames.shape[2] >= 2 * 32  # moved beside the original
+    # each panel captioned on the white band above it (demo.TURNTABLE_LABELS): dark text over both halves
+    band = frames[0, :12, :, :3].min(axis=-1)
+    half = frames.shape[2] // 2
+    assert band[:, :half].min() < 128 and band[:, half:].min() < 128 and np.median(band) > 200

@@ -177,7 +177,7 @@ class TaskOutput:
             renders[v] = out
             write_layers(self.dir, f"view{v:03d}", layer_channels(out, main),
                          [lay for lay in ("full", "bg", "fg", "res") if lay in out], camera=ds.cameras[v],
-                         pngs=len(renders) <= PREVIEW_VIEWS)
+                         pngs=len(renders) <= PREVIEW_VIEWS, title=self.task)
         return renders
 
     def finish(self, metrics, log=None):
