@@ -243,3 +243,36 @@ def test_a_latin1_transforms_json_is_named(tmp_path):
     (tmp_path / "transforms.json").write_bytes(json.dumps(meta, ensure_ascii=False).encode("latin-1"))
     with pytest.raises(DatasetError, match=f"^{root}/transforms.json: not UTF-8 text, as JSON must be .byte "):
         load_dataset(root)
+
+
+# ------------------------------------------------------------------------------------- the object's hull, up front
+def test_an_empty_object_hull_is_refused_before_the_fit(tmp_path):
+    """check_hull (called at the fit's start): masks only on test views, or masks that no point of the
+    scene box projects into from the training views, are refused in one line naming the dataset."""
+    from mi_voldis.fit.config import FitConfig
+    from mi_voldis.fit.fields import FitInputs
+    from mi_voldis.fit.hull import check_hull
+    root = str(tmp_path)
+    meta, names = transforms(root, n=6)
+    for name in names:  # every view sees the origin at its centre
+        m = np.zeros((H, W), np.uint8)
+        m[6:12, 8:16] = 255
+        iio.imwrite(os.path.join(root, "masks", name), m)
+    cfg = FitConfig.from_sources(None, [])
+    inputs = lambda: FitInputs.of(load_dataset(root, holdout=3), cfg, str(tmp_path / "ck.npz"), False)  # noqa: E731
+    check_hull(inputs())
+    for k, name in enumerate(names):  # object masks only on the test views (0 and 3)
+        if k % 3:
+            os.remove(os.path.join(root, "masks", name))
+    with pytest.raises(DatasetError, match=f"^{root}: no training view has an object mask .4 training views, 2 masked "
+                                           "test views.: the object's hull"):
+        check_hull(inputs())
+    for k, name in enumerate(names):  # masks in corners that no common point reaches
+        m = np.zeros((H, W), np.uint8)
+        if k % 2:
+            m[:3, :3] = 255
+        else:
+            m[-3:, -3:] = 255
+        iio.imwrite(os.path.join(root, "masks", name), m)
+    with pytest.raises(DatasetError, match=f"^{root}: the object's visual hull is empty: no point of the scene box"):
+        check_hull(inputs())

@@ -44,3 +44,31 @@ def hull_behind_occluders(points, cameras, masks, dilation_px, min_fraction, dep
     have = [k for k, d in enumerate(depths) if d is not None]
     shown = seen_elsewhere(points, [cameras[k] for k in have], [depths[k] for k in have], [~masks[k] for k in have])
     return voted & shown
+
+
+def check_hull(inputs, resolution=48):
+    """Refuses, before any fitting, a dataset whose object hull is empty, which the background phase
+    needs after the whole full-scene phase: no training view has an object mask (masks only on test
+    views, SPIn-NeRF's ``label/`` missing), or no point of a ``resolution``^3 lattice over the scene box
+    lies in the hull the masked training views carve (masks, poses or intrinsics that disagree). Raises
+    :class:`~mi_voldis.data.types.DatasetError` naming the dataset; nothing to check without masks."""
+    from ..data.types import DatasetError
+    ds, cfg = inputs.ds, inputs.cfg
+    if ds.masks is None:
+        return
+    views = ds.masked_train
+    if len(views) == 0:
+        tests = int(np.sum(ds.masked[ds.test])) if ds.masked is not None else 0
+        raise DatasetError(f"{ds.root}: no training view has an object mask ({len(ds.train)} training views, "
+                           f"{tests} masked test views): the object's hull and the background are learnt from the "
+                           "masked training views")
+    axes = [np.linspace(a, b, resolution) for a, b in zip(inputs.box.lo, inputs.box.hi)]
+    lattice = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    with np.errstate(all="ignore"):  # a contracted box's outer faces lie at infinity
+        points = inputs.space.to_world_np(lattice)
+    points = points[np.all(np.isfinite(points), axis=1)]
+    dilation = int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size)))
+    if not visual_hull(points, [ds.cameras[v] for v in views], ds.masks[views], dilation, cfg.hull_min_views).any():
+        raise DatasetError(f"{ds.root}: the object's visual hull is empty: no point of the scene box projects inside "
+                           f"the object masks of enough of the {len(views)} masked training views that see it "
+                           f"(hull_min_views {cfg.hull_min_views}); the masks, poses or intrinsics disagree")
