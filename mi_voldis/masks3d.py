@@ -151,6 +151,59 @@ def surface_masks(cameras, surf, given, tol=0.05):
     return out
 
 
+def given_mask(path, size):
+    """The object mask of ``path`` given to :func:`make_masks` for a view of ``size`` (H, W), refused
+    in one line naming the file when it is not one: another size, empty, covering every pixel, a colour
+    image, or a grey one with many pixels neither black nor white (a photo given as a mask)."""
+    from .data.images import _read, mask_values, read_mask
+    raw = _read(path, "mask", raw=True)
+    if raw.ndim == 3 and raw.shape[2] >= 3:
+        rgb = raw[..., :3].astype(np.float64)
+        spread = (rgb.max(axis=2) - rgb.min(axis=2)) / (1.0 if raw.dtype.kind == "f" else np.iinfo(raw.dtype).max)
+        if np.mean(spread > 0.1) > 0.01:
+            raise ValueError(f"{path}: a colour image, not a mask ({100 * np.mean(spread > 0.1):.0f}% of its pixels "
+                             "are coloured); a mask is white (or 1) on the object, black elsewhere")
+    values, _ = mask_values(path)
+    grey = float(np.mean((values > 0.1) & (values < 0.9)))
+    if grey > 0.05:
+        raise ValueError(f"{path}: not a mask: {100 * grey:.0f}% of its pixels are neither black nor white (a photo?); "
+                         "a mask is white (or 1) on the object, black elsewhere")
+    mask = read_mask(path, "white")
+    if mask.shape != tuple(size):
+        raise ValueError(f"{path}: mask is {mask.shape[1]}x{mask.shape[0]} but the images are {size[1]}x{size[0]}")
+    if not mask.any():
+        raise ValueError(f"{path}: the mask is empty")
+    if mask.all():
+        raise ValueError(f"{path}: the mask covers every pixel; it must leave some of the view as background")
+    return mask
+
+
+def check_run_dataset(run_dir, dataset):
+    """Refuses a fitted run whose ``config.json`` records another dataset than ``dataset`` (compared as
+    real paths): its surfaces are another scene's."""
+    import json
+    path = os.path.join(run_dir, "config.json")
+    try:
+        with open(path, encoding="utf-8") as f:
+            recorded = json.load(f).get("dataset", {}).get("path")
+    except (OSError, ValueError, AttributeError) as e:
+        raise ValueError(f"{path}: cannot read the run's record ({e})") from None
+    if recorded and os.path.realpath(recorded) != os.path.realpath(dataset):
+        raise ValueError(f"{run_dir}: the run was fitted on {recorded}, not on {dataset}; give --run a fit of this "
+                         "dataset (or a new folder to fit it into)")
+
+
+def check_box_seen(cameras, lo, hi, samples=16):
+    """Refuses a world box [lo, hi] that no camera has in its frame (``samples``^3 points of it tried),
+    before any fit: no view could mask any of it."""
+    axes = [np.linspace(a, b, samples) for a, b in zip(lo, hi)]
+    points = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    if not any(pixel_of(cam, points)[2].any() for cam in cameras):
+        raise ValueError(f"--box {','.join(f'{v:g}' for v in (*lo, *hi))}: no view has any of the box in its frame "
+                         f"(world units, the dataset's poses; the cameras stand around "
+                         f"{', '.join(f'{v:.3g}' for v in np.mean([c.to_world[:3, 3] for c in cameras], axis=0))})")
+
+
 MASK_FOLDERS = ("masks", "effects")  # the folders of a dataset make_masks may replace (the loaders read them)
 
 
@@ -174,33 +227,38 @@ def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=N
     object masks' IoU against it. ``resume`` / ``restart``: of the fit into ``run_dir``. Checked before
     any work: ``out`` apart from the dataset's files (a folder of masks inside it is what the loaders
     read), the run and the given masks; the run apart from the dataset."""
-    from .data import load_dataset
-    from .data.images import read_mask
+    from .data import check_rig, load_dataset
     from .fit.run import run_fit
     from .io.images import write_png
     from .io.run_folder import check_output, dataset_inputs, staged
     from .tasks.base import FittedRun
     fitted = os.path.isfile(os.path.join(run_dir, "scene.xml"))
-    if not fitted:
+    if fitted:
+        check_run_dataset(run_dir, dataset)
+    else:
         check_output(run_dir, dataset_inputs(dataset), resume, restart, program="train")
     inputs = mask_inputs(dataset, run_dir, given)
     check_output(out, inputs, program="make_masks")
     ds = load_dataset(dataset, fmt, holdout=0, factor=factor)
-    masks = {}
+    masks, named = {}, {}
     for key, path in (given or {}).items():
         v = view_index(ds, key)
-        masks[v] = read_mask(path, "white")
-        if masks[v].shape != tuple(ds.size):
-            raise ValueError(f"{path}: mask is {masks[v].shape[1]}x{masks[v].shape[0]} but the images are "
-                             f"{ds.size[1]}x{ds.size[0]}")
-        if not masks[v].any():
-            raise ValueError(f"{path}: the mask is empty")
+        if v in named:
+            raise ValueError(f"{path}: view {ds.names[v]} is given twice ({named[v]} and {path}); give each view once")
+        named[v] = path
+        masks[v] = given_mask(path, ds.size)
+    if box is not None:
+        check_box_seen(ds.cameras, *box)
     if not fitted:
+        check_rig(ds)
         run_fit(dataset, run_dir, cfg, resume, progress, fmt, factor=factor, restart=restart)
     integrator = FittedRun(run_dir, dataset).integrator()
     surf = surfaces(integrator, ds.cameras)
     if box is not None:
         result = box_masks(ds.cameras, surf, *box)
+        if not any(m.any() for m in result):
+            raise ValueError(f"--box {','.join(f'{v:g}' for v in (*box[0], *box[1]))}: no view's surface lies in the "
+                             "box (world units, the dataset's poses); nothing written")
     elif effects:
         result = surface_masks(ds.cameras, surf, masks)
     else:

@@ -276,3 +276,37 @@ def test_an_empty_object_hull_is_refused_before_the_fit(tmp_path):
         iio.imwrite(os.path.join(root, "masks", name), m)
     with pytest.raises(DatasetError, match=f"^{root}: the object's visual hull is empty: no point of the scene box"):
         check_hull(inputs())
+
+
+# ------------------------------------------------------------------------------------- make_masks' given masks
+def test_make_masks_refuses_what_is_not_a_mask_of_this_dataset(tiny_dataset, tiny_run, tmp_path, capsys):
+    """An all-white mask, a photo (colour or grey), the same view twice, a run of another dataset: one line
+    naming the file or flag, before anything is fitted or written."""
+    import shutil
+
+    from test_bad_inputs import _boundary, script, tree_digest
+    names = sorted(os.listdir(os.path.join(tiny_dataset, "images")))
+    photo = os.path.join(tiny_dataset, "images", names[0])
+    mask = os.path.join(tiny_dataset, "masks", os.path.splitext(names[0])[0] + ".png")
+    white, grey = str(tmp_path / "white.png"), str(tmp_path / "grey.png")
+    iio.imwrite(white, np.full(iio.imread(mask).shape[:2], 255, np.uint8))
+    iio.imwrite(grey, np.round(iio.imread(photo)[..., :3].mean(axis=2)).astype(np.uint8))
+    other = str(tmp_path / "other")
+    shutil.copytree(tiny_dataset, other)
+    out = str(tmp_path / "masks")
+    before = [tree_digest(tiny_dataset), tree_digest(tiny_run)]
+    for args, message in [
+        (["--from-views", f"1={white}"], f"{white}: the mask covers every pixel"),
+        (["--from-views", f"1={photo}"], f"{photo}: a colour image, not a mask"),
+        (["--from-views", f"1={grey}"], f"{grey}: not a mask: "),
+        (["--from-views", f"1={mask}", f"{os.path.splitext(names[1])[0]}={mask}"],
+         f"{mask}: view {names[1]} is given twice ({mask} and {mask})"),
+        (["--from-views", f"1={mask}", f"1={white}"], f"--from-views: view '1' is given twice ({mask} and {white})"),
+    ]:
+        assert _boundary.run(script("make_masks").main, [tiny_dataset, "--out", out, "--run", tiny_run, *args]) == 1
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith("error: ") and message in err, err
+    assert _boundary.run(script("make_masks").main, [other, "--out", out, "--run", tiny_run, "--from-views",
+                                                     f"1={mask}"]) == 1
+    assert f"{tiny_run}: the run was fitted on {tiny_dataset}, not on {other}" in capsys.readouterr().err
+    assert not os.path.exists(out) and before == [tree_digest(tiny_dataset), tree_digest(tiny_run)]

@@ -57,8 +57,8 @@ def test_the_shadow_from_two_views_is_found_in_every_view():
 
 
 def test_make_masks_script_writes_masks_train_reads(tiny_dataset, tiny_run, tmp_path, capsys):
-    """The script on a fitted run: masks for every view, the given views' own masks kept, a box whose
-    masks are empty outside it, and bad input as one line naming the problem."""
+    """The script on a fitted run: masks for every view, the given views' own masks kept, and bad input
+    (a box no view has in its frame among it) as one line naming the problem."""
     from test_bad_inputs import _boundary, script
 
     from mi_voldis.data import load_dataset
@@ -73,10 +73,11 @@ def test_make_masks_script_writes_masks_train_reads(tiny_dataset, tiny_run, tmp_
     written = [read_mask(os.path.join(out, n), "white") for n in ds.names]
     np.testing.assert_array_equal(written[1], ds.masks[1])
     assert sum(m.any() for m in written) >= len(ds.names) - 1
-    far = str(tmp_path / "far")  # a box far from everything: nothing is the object
+    far = str(tmp_path / "far")  # a box no view has in its frame: refused before anything is written
     assert _boundary.run(main, [tiny_dataset, "--out", far, "--run", tiny_run, "--quiet",
-                                "--box", "50,50,50,51,51,51"]) == 0
-    assert json.loads(capsys.readouterr().out)["empty_views"] == len(ds.names)
+                                "--box", "50,50,50,51,51,51"]) == 1
+    assert "--box 50,50,50,51,51,51: no view has any of the box in its frame" in capsys.readouterr().err
+    assert not os.path.exists(far)
     assert _boundary.run(main, [tiny_dataset, "--out", far, "--run", tiny_run, "--box", "1,1,1,0,0,0"]) == 1
     assert "--box expects x0,y0,z0,x1,y1,z1" in capsys.readouterr().err
     assert _boundary.run(main, [tiny_dataset, "--out", far, "--run", tiny_run, "--from-views",

@@ -59,6 +59,8 @@ def main(argv=None):
                 ap.error(f"--from-views expects VIEW=MASK.png, got '{item}'")
             if not os.path.isfile(path):
                 raise ValueError(f"{path}: no such mask file")
+            if view in given:
+                raise ValueError(f"--from-views: view '{view}' is given twice ({given[view]} and {path})")
             given[view] = path
     if args.effects and not args.from_views:
         ap.error("--effects goes with --from-views")
