@@ -233,12 +233,12 @@ def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=N
     from .io.run_folder import check_output, dataset_inputs, staged
     from .tasks.base import FittedRun
     fitted = os.path.isfile(os.path.join(run_dir, "scene.xml"))
-    if fitted:
-        check_run_dataset(run_dir, dataset)
-    else:
+    if not fitted:
         check_output(run_dir, dataset_inputs(dataset), resume, restart, program="train")
     inputs = mask_inputs(dataset, run_dir, given)
     check_output(out, inputs, program="make_masks")
+    if fitted:
+        check_run_dataset(run_dir, dataset)
     ds = load_dataset(dataset, fmt, holdout=0, factor=factor)
     masks, named = {}, {}
     for key, path in (given or {}).items():

@@ -310,3 +310,35 @@ def test_make_masks_refuses_what_is_not_a_mask_of_this_dataset(tiny_dataset, tin
                                                      f"1={mask}"]) == 1
     assert f"{tiny_run}: the run was fitted on {tiny_dataset}, not on {other}" in capsys.readouterr().err
     assert not os.path.exists(out) and before == [tree_digest(tiny_dataset), tree_digest(tiny_run)]
+
+
+# ------------------------------------------------------------------------------------- the error boundary
+def test_the_boundary_keeps_the_reason_dr_jit_puts_above_and_numpy_warnings_off_stderr(capsys):
+    import warnings
+
+    import drjit as dr
+
+    from voldis_cli import boundary
+
+    def drjit_fails(argv):
+        dr.mean(object())
+
+    assert boundary.run(drjit_fails, []) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("error: dr.mean(): encountered an exception: drjit.sum(<object>): the input must be"), err
+    assert "see above" not in err and err.count("\n") == 1
+
+    def numpy_warns_then_fails(argv):
+        np.mean(np.zeros(0))
+        raise ValueError("grid.npz: empty")
+
+    assert boundary.run(numpy_warns_then_fails, []) == 1
+    assert capsys.readouterr().err == ("error: grid.npz: empty (after RuntimeWarning: Mean of empty slice; "
+                                       "RuntimeWarning: invalid value encountered in scalar divide)\n")
+
+    def numpy_warns(argv):
+        np.float32(1) / np.float32(0)
+        warnings.warn("a library's word")
+
+    assert boundary.run(numpy_warns, []) == 0
+    assert capsys.readouterr().err == "warning: UserWarning: a library's word\n"

@@ -8,6 +8,7 @@ mi_voldis.
 import argparse
 import os
 import sys
+import warnings
 
 USER_ERRORS = ("ValueError", "OSError", "DatasetError", "FileNotFoundError", "PermissionError", "IsADirectoryError",
                "NotADirectoryError")
@@ -15,33 +16,58 @@ USER_ERRORS = ("ValueError", "OSError", "DatasetError", "FileNotFoundError", "Pe
 
 def one_line(error):
     """The error's message on one line. Mitsuba's errors span several, and when a plugin written in
-    Python raised, they embed its traceback: then the plugin's own message (the last line) is the one."""
+    Python raised, they embed its traceback: then the plugin's own message (the last line) is the one.
+    Dr.Jit's say "failed (see above)" and carry the reason as their cause: it follows, after a colon."""
     text = str(error)
     if "Traceback (most recent call last):" in text:
         last = [line for line in text.splitlines() if line.strip()][-1].strip()
         name, _, message = last.partition(": ")
         text = message if name.isidentifier() and message else last
-    return " ".join(text.split()) or type(error).__name__
+    text = " ".join(text.split()) or type(error).__name__
+    cause = error.__cause__ or error.__context__
+    if "(see above)" in text and cause is not None and cause is not error:
+        text = f"{text.replace(' (see above)', '').rstrip('.!')}: {one_line(cause)}"
+    return text
+
+
+def _warning_line(caught):
+    """What the warnings ``caught`` while the program ran said, on one line (each once, in order)."""
+    said = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught))
+    return "; ".join(said)
 
 
 def run(main, argv=None):
     """Run ``main(argv)`` and return the process's exit code."""
     argv = sys.argv[1:] if argv is None else list(argv)
     debug = "--debug" in argv
-    try:
-        main(argv)
-    except KeyboardInterrupt:
-        if debug:
-            raise
-        print("interrupted", file=sys.stderr)
-        return 130
-    except Exception as e:  # noqa: BLE001  (the boundary: everything becomes one line)
-        if debug:
-            raise
-        kinds = {k.__name__ for k in type(e).__mro__}
-        hint = "" if kinds & set(USER_ERRORS) else f" ({type(e).__name__}; run again with --debug for the traceback)"
-        print(f"error: {one_line(e)}{hint}", file=sys.stderr)
-        return 1
+    # numpy's RuntimeWarnings (a division by zero, an empty mean) are kept from stderr, where they add
+    # lines of numpy's source for what the code expects and handles; an error names every warning before
+    # it in its one line; after a run that ends well, other warnings are one line; --debug prints all as
+    # Python does
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")
+        try:
+            main(argv)
+        except KeyboardInterrupt:
+            if debug:
+                raise
+            print("interrupted", file=sys.stderr)
+            return 130
+        except Exception as e:  # noqa: BLE001  (the boundary: everything becomes one line)
+            if debug:
+                raise
+            kinds = {k.__name__ for k in type(e).__mro__}
+            hint = "" if kinds & set(USER_ERRORS) else f" ({type(e).__name__}; run again with --debug for the " \
+                                                       "traceback)"
+            said = _warning_line(caught)
+            print(f"error: {one_line(e)}{hint}" + (f" (after {said})" if said else ""), file=sys.stderr)
+            return 1
+        finally:
+            for w in caught if debug else ():
+                print(warnings.formatwarning(w.message, w.category, w.filename, w.lineno).rstrip(), file=sys.stderr)
+    others = _warning_line([w for w in caught if not issubclass(w.category, RuntimeWarning)])
+    if others and not debug:
+        print(f"warning: {others}", file=sys.stderr)
     return 0
 
 
