@@ -135,7 +135,7 @@ COLMAP_APPLIED = [[0, 1, 0, 0], [1, 0, 0, 0], [0, 0, -1, 0]]
 
 def _read_json(path, what):
     try:
-        with open(path) as f:
+        with open(path, encoding="utf-8") as f:
             return json.load(f)
     except (OSError, ValueError) as e:
         raise ValueError(f"{path}: not {what} ({type(e).__name__}: {e})") from None
@@ -150,54 +150,86 @@ def capture_applied(capture):
     if not os.path.isfile(path):
         return applied, scale
     meta = _read_json(path, "a transforms.json")
-    try:
-        if "applied_transform" in meta:
-            applied[:3, :4] = np.asarray(meta["applied_transform"], np.float64)[:3, :4]
-        elif os.path.isdir(os.path.join(capture, "colmap", "sparse", "0")):
-            applied[:3, :4] = COLMAP_APPLIED
-        scale = float(meta.get("applied_scale", 1.0))
-    except (ValueError, TypeError) as e:
-        raise ValueError(f"{path}: malformed applied_transform / applied_scale ({e})") from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"{path}: not a transforms.json (a JSON object)")
+    if "applied_transform" in meta:
+        applied[:3, :4] = _matrix(meta["applied_transform"], path, "applied_transform", ((3, 4), (4, 4)))[:3, :4]
+    elif os.path.isdir(os.path.join(capture, "colmap", "sparse", "0")):
+        applied[:3, :4] = COLMAP_APPLIED
+    if "applied_scale" in meta:
+        scale = _positive(meta, path, "applied_scale")
     return applied, scale
+
+
+def _matrix(value, path, key, shapes):
+    """``value`` as a float64 array of one of ``shapes`` with finite entries, else one line naming the
+    file and key."""
+    try:
+        m = np.asarray(value, np.float64)
+    except (TypeError, ValueError):
+        m = None
+    if m is None or m.shape not in shapes or not np.all(np.isfinite(m)):
+        want = " or ".join("x".join(map(str, s)) if len(s) > 1 else f"{s[0]} numbers" for s in shapes)
+        got = "non-numbers" if m is None else "non-finite numbers" if m.shape in shapes else f"shape {m.shape}"
+        raise ValueError(f"{path}: '{key}' must be {want}, all finite; got {got}")
+    return m
+
+
+def _positive(data, path, key, whole=False):
+    """``data[key]`` as a positive (whole) number, else one line naming the file and key."""
+    value = data.get(key)
+    ok = not isinstance(value, bool) and isinstance(value, (int, float)) and np.isfinite(value) and value > 0
+    if not ok or (whole and value != int(value)):
+        raise ValueError(f"{path}: '{key}' must be a positive {'whole ' if whole else ''}number, got "
+                         f"{json.dumps(value)}")
+    return int(value) if whole else float(value)
 
 
 def read_nerfstudio_path(path, dataparser=None, capture=None):
     """Cameras of a nerfstudio ``camera_path.json`` in the world of the capture folder ``capture``
     (its ``applied_transform``, ``applied_scale``), through ``dataparser`` (its
-    ``dataparser_transforms.json``) when given (see the module docstring)."""
+    ``dataparser_transforms.json``) when given (see the module docstring). Every field is checked,
+    the message naming the file and the key (a NaN pose is refused, not rendered black)."""
     data = _read_json(path, "a nerfstudio camera path")
-    try:
-        width, height = int(data["render_width"]), int(data["render_height"])
-        entries = data["camera_path"]
-        kind = str(data.get("camera_type", "perspective"))
-    except (KeyError, TypeError, ValueError) as e:
-        raise ValueError(f"{path}: not a nerfstudio camera path ({type(e).__name__}: {e})") from None
+    if not isinstance(data, dict) or "camera_path" not in data:
+        raise ValueError(f"{path}: not a nerfstudio camera path (a JSON object with 'camera_path', 'render_width' "
+                         "and 'render_height'; it has no 'camera_path')")
+    width, height = _positive(data, path, "render_width", True), _positive(data, path, "render_height", True)
+    entries = data.get("camera_path")
+    if not isinstance(entries, list) or not entries:
+        raise ValueError(f"{path}: 'camera_path' must be a non-empty list of cameras, got "
+                         f"{json.dumps(entries) if entries is None or not isinstance(entries, list) else '[]'}")
+    kind = str(data.get("camera_type", "perspective"))
     if kind.lower() != "perspective":
         raise ValueError(f"{path}: camera_type '{kind}' is not supported (only perspective cameras render)")
     back = np.eye(4)
     if dataparser is not None:
         dp = _read_json(dataparser, "a dataparser_transforms.json")
-        try:
-            t = np.eye(4)
-            t[:3, :4] = np.asarray(dp["transform"], np.float64)[:3, :4]
-            scale = float(dp["scale"])
-        except (KeyError, ValueError, TypeError) as e:
-            raise ValueError(f"{dataparser}: not a dataparser_transforms.json ({type(e).__name__}: {e})") from None
+        if not isinstance(dp, dict) or "transform" not in dp:
+            raise ValueError(f"{dataparser}: not a dataparser_transforms.json (an object with 'transform' and 'scale')")
+        t = np.eye(4)
+        t[:3, :4] = _matrix(dp["transform"], dataparser, "transform", ((3, 4), (4, 4)))[:3, :4]
+        if abs(np.linalg.det(t[:3, :3])) < 1e-12:
+            raise ValueError(f"{dataparser}: 'transform' is singular (it maps the capture onto a plane or less)")
+        scale = _positive(dp, dataparser, "scale")
         applied, applied_scale = capture_applied(capture) if capture else (np.eye(4), 1.0)
         back = applied @ np.linalg.inv(t) @ np.diag([applied_scale / scale] * 3 + [1.0])
     out = []
     for k, entry in enumerate(entries):
-        try:
-            c2w = np.asarray(entry["camera_to_world"], np.float64).reshape(4, 4)
-            fov_y = float(entry["fov"])
-        except (KeyError, ValueError, TypeError) as e:
-            raise ValueError(f"{path}: camera_path[{k}] is malformed ({type(e).__name__}: {e})") from None
-        c2w = back @ c2w
-        c2w[:3, :3] /= np.linalg.norm(c2w[:3, :3], axis=0)  # the viewer's scale is not the camera's
-        fov_x = np.degrees(2 * np.arctan(np.tan(np.radians(fov_y) / 2) * width / height))
+        if not isinstance(entry, dict):
+            raise ValueError(f"{path}: camera_path[{k}] must be an object with 'camera_to_world' and 'fov'")
+        c2w = _matrix(entry.get("camera_to_world"), path, f"camera_path[{k}].camera_to_world", ((16,), (4, 4)))
+        fov_y = entry.get("fov")
+        if isinstance(fov_y, bool) or not isinstance(fov_y, (int, float)) or not 0 < fov_y < 180:
+            raise ValueError(f"{path}: camera_path[{k}].fov must be a vertical field of view in (0, 180) degrees, "
+                             f"got {json.dumps(entry.get('fov'))}")
+        c2w = back @ c2w.reshape(4, 4)
+        norms = np.linalg.norm(c2w[:3, :3], axis=0)
+        if not np.all(norms > 1e-12):
+            raise ValueError(f"{path}: camera_path[{k}].camera_to_world has no rotation (a zero column)")
+        c2w[:3, :3] /= norms  # the viewer's scale is not the camera's
+        fov_x = np.degrees(2 * np.arctan(np.tan(np.radians(float(fov_y)) / 2) * width / height))
         out.append(Camera(opengl_to_mitsuba(c2w), float(fov_x), width, height))
-    if not out:
-        raise ValueError(f"{path}: the camera path is empty")
     return out
 
 

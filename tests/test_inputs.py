@@ -342,3 +342,34 @@ def test_the_boundary_keeps_the_reason_dr_jit_puts_above_and_numpy_warnings_off_
 
     assert boundary.run(numpy_warns, []) == 0
     assert capsys.readouterr().err == "warning: UserWarning: a library's word\n"
+
+
+# ------------------------------------------------------------------------------------- camera_path.json
+@pytest.mark.parametrize("change, message", [
+    (lambda d, p: d.pop("camera_path"), "{path}: not a nerfstudio camera path"),
+    (lambda d, p: d.update(camera_path=[]), "{path}: 'camera_path' must be a non-empty list of cameras, got []"),
+    (lambda d, p: d.update(render_width="512"), "{path}: 'render_width' must be a positive whole number, got \"512\""),
+    (lambda d, p: d.update(render_height=0), "{path}: 'render_height' must be a positive whole number, got 0"),
+    (lambda d, p: d["camera_path"][1].update(camera_to_world=[float("nan")] * 16),
+     "{path}: 'camera_path[1].camera_to_world' must be 16 numbers or 4x4, all finite; got non-finite numbers"),
+    (lambda d, p: d["camera_path"][0].update(camera_to_world=[1, 0, 0]),
+     "{path}: 'camera_path[0].camera_to_world' must be 16 numbers or 4x4, all finite; got shape (3,)"),
+    (lambda d, p: d["camera_path"][0].update(fov=180),
+     "{path}: camera_path[0].fov must be a vertical field of view in"),
+    (lambda d, p: p.update(scale=0), "{dp}: 'scale' must be a positive number, got 0"),
+    (lambda d, p: p.update(transform=[[1, 0], [0, 1]]), "{dp}: 'transform' must be 3x4 or 4x4, all finite; got shape"),
+    (lambda d, p: p.update(transform=[[0, 0, 0, 0]] * 3), "{dp}: 'transform' is singular"),
+])
+def test_a_camera_path_is_checked_field_by_field(tmp_path, change, message):
+    from mi_voldis.camera_paths import read_nerfstudio_path
+    eye = np.eye(4).ravel().tolist()
+    data = {"render_width": 40, "render_height": 30, "camera_path": [{"camera_to_world": eye, "fov": 50}] * 2}
+    data["camera_path"] = [dict(e) for e in data["camera_path"]]
+    dp = {"transform": np.eye(4)[:3].tolist(), "scale": 0.5}
+    change(data, dp)
+    path, dpath = tmp_path / "camera_path.json", tmp_path / "dataparser_transforms.json"
+    path.write_text(json.dumps(data))
+    dpath.write_text(json.dumps(dp))
+    with pytest.raises(ValueError) as err:
+        read_nerfstudio_path(str(path), str(dpath))
+    assert str(err.value).startswith(message.format(path=path, dp=dpath)), err.value
