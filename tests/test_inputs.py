@@ -18,6 +18,7 @@ from mi_voldis.data.llff import write_llff
 from mi_voldis.io.exr import write_exr
 from mi_voldis.synth.rigs import look_at
 
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 H, W = 18, 24
 
 
@@ -276,6 +277,17 @@ def test_an_empty_object_hull_is_refused_before_the_fit(tmp_path):
         iio.imwrite(os.path.join(root, "masks", name), m)
     with pytest.raises(DatasetError, match=f"^{root}: the object's visual hull is empty: no point of the scene box"):
         check_hull(inputs())
+    # train.py stops there, before its first step: one line, no run, no checkpoint left to resume
+    import subprocess
+    import sys
+    out = tmp_path / "run"
+    done = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "train.py"), root, "--out", str(out),
+                           "--holdout", "3", "--quiet"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 1 and done.stderr.strip().splitlines() == [
+        f"error: {root}: the object's visual hull is empty: no point of the scene box projects inside the object "
+        "masks of enough of the 4 masked training views that see it (hull_min_views 0.9); the masks, poses or "
+        "intrinsics disagree"], done.stderr
+    assert not out.exists() and not os.path.exists(str(out) + ".partial")
 
 
 # ------------------------------------------------------------------------------------- make_masks' given masks

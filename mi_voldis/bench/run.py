@@ -114,9 +114,7 @@ TRUTH_SCENES = SCENES + [f"random{k}" for k in RANDOM_SEEDS]  # the scenes with 
 CAPTURES = ["fern", "horns", "statue", "garden"]  # ../shared/data; skipped when absent
 VARIANTS = {
     "tabletop": {"dense (carve=false)": ["carve=false"]},
-    "fern": {"dense 192 NDC, fixed schedule (before)": ["space=\"ndc\"", "carve=false", "minutes=null",
-                                                       "steps_full=1400",
-                                                       "resolution_schedule=[[0,64],[300,128],[700,192]]"]},
+    "fern": {"contracted space (the default before NDC)": ["space=\"contract\""]},
 }
 QUICK_SETS = ["minutes=null", "steps_full=200", "steps_bg=40", "resolution_schedule=[[0,32],[80,64]]",
               "sh_degree=0", "occupancy_at_step=80", "eval_every=50"]

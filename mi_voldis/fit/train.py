@@ -45,6 +45,7 @@ import drjit as dr
 import numpy as np
 
 from .. import exposure
+from ..data import check_rig
 from ..field_state import FieldState, neighbour_vertices
 from ..inpaint2d import fallback_note
 from ..inpaint2d import inpainter as get_inpainter
@@ -64,6 +65,7 @@ from .background import (
 )
 from .fields import FitInputs, init_fields
 from .guide import colour_prior
+from .hull import check_hull
 from .lift import keys_mask, lift_prior
 from .problem import FieldFit
 from .schedule import (
@@ -88,6 +90,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     :class:`FitState` (fields, log, phase times). ``inpainter``: a 2D inpainter callable for the ``guided``
     and ``lift`` priors (:mod:`mi_voldis.inpaint2d`), instead of the one ``cfg.prior_inpainter`` names."""
     cfg = cfg.for_backend(backend())
+    check_rig(dataset)  # cameras at one point: nothing to fit depth from
     inputs = FitInputs.of(dataset, cfg, checkpoint, progress)
     adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
     state = FitState.load(checkpoint, adam) if resume else None
@@ -97,6 +100,8 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     if has_masks and cfg.bg_strategy in ("guided", "lift"):  # fail now, not after the full phase
         check_inpainter(inpainter or cfg.prior_inpainter, progress)
     scratch = cfg.bg_strategy == "scratch" and has_masks
+    if has_masks and not scratch:  # an empty object hull fails now, not after the full phase
+        check_hull(inputs)
     roles = ("full", "bg") if scratch else ("full",)
     if state is None:
         state = FitState(np.asarray(inputs.box.lo, np.float64), np.asarray(inputs.box.hi, np.float64), adam)
