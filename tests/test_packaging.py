@@ -81,3 +81,62 @@ def test_the_installed_package_finds_its_scene_and_runs_the_benchmarks_dataset_c
     with open(out / "transforms.json") as f:
         frames = json.load(f)["frames"]
     assert len(frames) == 3 and all((out / fr["file_path"]).is_file() for fr in frames)
+
+
+COMMANDS = ("voldis-train", "voldis-edit", "voldis-render", "voldis-make-dataset", "voldis-make-masks",
+            "voldis-evaluate", "voldis-export-vol", "voldis-bench", "voldis-demo")
+
+
+def test_the_wheel_installed_by_pip_into_a_fresh_venv_runs_its_commands(wheel, tmp_path):
+    """``pip install`` of the wheel into a new venv, then its console commands as a user runs them (the
+    wrappers pip writes into the venv's bin/, from a folder outside the checkout, no PYTHONPATH): the nine
+    commands' ``--help``, and ``voldis-make-dataset`` on the bundled scene the installed package names.
+    The venv is made without pip and the wheel installed with --no-deps (offline); it sees the test
+    interpreter's site-packages, for the dependencies only, through a .pth line that comes after its own
+    site-packages (a folder a .pth names is only appended to sys.path: its own .pth files, such as a
+    checkout's editable install, are not run), so the mi_voldis imported is the one pip installed."""
+    import site
+    import sysconfig
+
+    venv = tmp_path / "venv"
+    made = subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], capture_output=True,
+                          text=True, timeout=120)
+    assert made.returncode == 0, made.stderr
+    python = venv / "bin" / "python"
+    purelib = subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
+                             capture_output=True, text=True, timeout=60).stdout.strip()
+    deps = [p for p in site.getsitepackages() + [sysconfig.get_path("purelib"), sysconfig.get_path("platlib")]
+            if os.path.isdir(p)]
+    with open(os.path.join(purelib, "_test_dependencies.pth"), "w") as f:
+        f.write("\n".join(dict.fromkeys(deps)) + "\n")
+    installed = subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "--no-deps",
+                                "--no-index", "-q", str(wheel)], capture_output=True, text=True, timeout=300)
+    assert installed.returncode == 0, installed.stderr
+
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV", "PYTHONHOME")}
+    env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+    cwd = tmp_path / "elsewhere"
+    cwd.mkdir()
+
+    def command(*args):
+        done = subprocess.run([str(a) for a in args], capture_output=True, text=True, cwd=cwd, env=env,
+                              timeout=300)
+        assert done.returncode == 0, f"{' '.join(map(str, args))}:\n{done.stdout}\n{done.stderr}"
+        return done.stdout
+
+    where = json.loads(command(python, "-c", "import json, mi_voldis; from mi_voldis.synth import bundled_scene; "
+                                             "print(json.dumps([mi_voldis.__file__, bundled_scene('tabletop')]))"))
+    package, scene = (os.path.realpath(p) for p in where)
+    assert package == os.path.realpath(os.path.join(purelib, "mi_voldis", "__init__.py"))
+    assert not package.startswith(os.path.realpath(ROOT) + os.sep)
+    assert scene == os.path.realpath(os.path.join(purelib, "mi_voldis", "scenes", "tabletop.xml"))
+    for name in COMMANDS:
+        script = venv / "bin" / name
+        assert script.is_file(), f"pip wrote no {name} into the venv's bin/"
+        assert "usage:" in command(script, "--help"), name
+    out = tmp_path / "data"
+    command(venv / "bin" / "voldis-make-dataset", scene, "--out", out, "--views", "2", "--res", "16x12",
+            "--spp", "1", "--quiet")
+    with open(out / "transforms.json") as f:
+        frames = json.load(f)["frames"]
+    assert len(frames) == 2 and all((out / fr["file_path"]).is_file() for fr in frames)
