@@ -110,6 +110,18 @@ def test_nonneg_residual_only_adds_light(tiny_run):
     assert colour.min() >= 0.0  # sigmoid colours and softplus densities: non-negative by construction
     run = FittedRun(tiny_run)
     reload_and_compare(out, run.integrator(fields={"residual": res}, mode="full"), ("full", "res"))
+    # its EXRs add the res layer as Blender and Nuke read it: an RGBA pass res and a Z pass res_depth
+    from test_compositing import exr_passes
+
+    from mi_voldis.io.exr import read_exr
+    exrs = sorted(f for f in os.listdir(out) if f.endswith(".exr"))
+    assert exrs
+    nuke, blender = exr_passes(read_exr(os.path.join(out, exrs[0])))
+    rgba, z = {"R", "G", "B", "A"}, {"Z"}
+    assert nuke == {"rgba": rgba, "full": rgba, "bg": rgba, "fg": rgba, "res": rgba, "depth": z,
+                    "full_depth": z, "bg_depth": z, "fg_depth": z, "res_depth": z}
+    assert blender == {("", "Combined"): rgba, ("", "res"): rgba, ("", "res_depth"): z,
+                       **{("", k): v for k, v in nuke.items() if k not in ("rgba", "res", "res_depth")}}
 
 
 def test_unknown_task_and_missing_run(tiny_run, tmp_path):
