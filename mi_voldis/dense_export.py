@@ -57,7 +57,10 @@ def sample_field(field, space, x):
     return sigma.astype(np.float32), np.stack([np.array(c, np.float32) for c in rgb], -1)
 
 
-def export_dense(field, space, lo, hi, resolution, slab_vertices=1 << 21):
+SLAB_VERTICES = 1 << 21  # points evaluated at once by export_dense
+
+
+def export_dense(field, space, lo, hi, resolution, slab_vertices=SLAB_VERTICES):
     """``(sigma_t, albedo)`` arrays (Z, Y, X, 1) and (Z, Y, X, 3) of ``field`` on the world region
     ``lo``..``hi`` at ``resolution`` = (N_x, N_y, N_z) cell centres (module docstring), evaluated in
     z-slabs of about ``slab_vertices`` values."""

@@ -11,6 +11,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -76,7 +77,8 @@ def world(tiny_dataset, tiny_run, tmp_path_factory):
             frames.append(frame)
         meta["frames"] = frames
         json.dump(meta, open(copy / "transforms.json", "w"))
-    for name, breakage in (("no_config", "config"), ("bad_grid", "grid"), ("bad_xml", "xml"), ("nan_grid", "nan")):
+    for name, breakage in (("no_config", "config"), ("bad_grid", "grid"), ("bad_xml", "xml"), ("nan_grid", "nan"),
+                           ("inverted_box", "box")):
         broken = base / name
         shutil.copytree(tiny_run, broken)
         if breakage == "config":
@@ -90,7 +92,10 @@ def world(tiny_dataset, tiny_run, tmp_path_factory):
             import numpy as np
             with np.load(broken / "full_grid.npz") as f:
                 arrays = {k: f[k] for k in f.files}
-            arrays["data"][0, 0] = np.nan
+            if breakage == "nan":
+                arrays["data"][0, 0] = np.nan
+            else:  # min and max swapped on the x axis
+                arrays["bbox"][:, 0] = arrays["bbox"][::-1, 0]
             np.savez(broken / "full_grid.npz", **arrays)
     (base / "plain.xml").write_text('<scene version="3.0.0"><integrator type="path"/></scene>')
     return {"dataset": tiny_dataset, "run": run, "existing": str(existing), "file": str(base / "a_file"),
@@ -151,6 +156,14 @@ CASES = [
     (OPT, ["{base}/bad_grid", "--task", "removal"], 1, "full_grid.npz: not a brick grid file"),
     (OPT, ["{base}/nan_grid", "--task", "removal"], 1, "full_grid.npz: brick data contains NaN"),
     (OPT, ["{base}/bad_xml", "--task", "removal"], 1, "scene.xml"),
+    (OPT, ["{base}/inverted_box", "--task", "removal"], 1,
+     "{base}/inverted_box/full_grid.npz: the grid's box needs min < max on every axis, got min [2.55,"),
+    (OPT, ["{run}", "--task", "transform", "--rotate", "y:1e308"], 1, "--rotate: rotate must be an angle of at most "
+     "1e+06 degrees either way (a turn repeats every 360), got \"y:1e308\""),
+    (OPT, ["{run}", "--task", "transform", "--rotate", "1,0,0:-2e6"], 1, "--rotate: rotate must be an angle of at"),
+    (OPT, ["{run}", "--task", "removal", "--seed", "-1"], 1, "--seed: seed must be a number >= 0, got -1"),
+    (R, ["{base}/inverted_box/scene.xml", "--out", "{existing}"], 1,
+     "{base}/inverted_box/full_grid.npz: the grid's box needs min < max on every axis"),
     (R, ["{base}/none.xml", "--out", "{existing}"], 1, "{base}/none.xml: no such scene file"),
     (R, ["{run}/scene.xml", "--out", "{existing}", "--spp", "-4"], 2, "--spp: must be a whole number >= 1"),
     (R, ["{run}/scene.xml", "--out", "{existing}", "--spp", "0"], 2, "--spp: must be a whole number >= 1"),
@@ -169,6 +182,9 @@ CASES = [
     (M, [SCENE, "--out", "{existing}", "--res", "0x10"], 2, "--res must look like"),
     (M, ["{base}/none.xml", "--out", "{existing}"], 1, "{base}/none.xml: no such scene file"),
     (M, [SCENE, "--out", "{file}", "--views", "2", "--res", "8x6", "--spp", "1"], 1, "{file}: exists and is not"),
+    (M, [SCENE, "--out", "{existing}", "--views", "2", "--seed", "-1"], 1, "--seed must be from 0 to 4294 for 2 "
+     "views (each render's seed, seed x 1000003 + view, is a 32-bit number), got -1"),
+    (M, [SCENE, "--out", "{existing}", "--views", "2", "--seed", "4295"], 1, "--seed must be from 0 to 4294 for 2"),
     (E, ["{run}/scene.xml", "--out", "{existing}", "--field", "moved"], 1, "no field 'moved'"),
     (E, ["{run}/scene.xml", "--out", "{existing}", "--region", "0,0,0,1,1"], 2, "--region expects 6"),
     (E, ["{run}/scene.xml", "--out", "{existing}", "--resolution", "0"], 2, "must be a whole number >= 1"),
@@ -221,6 +237,76 @@ def test_internal_errors_say_how_to_see_the_traceback(capsys):
     assert err.startswith("error: 'slot' (KeyError; run again with --debug") and "Traceback" not in err
     with pytest.raises(KeyError):
         _boundary.run(broken, ["--debug"])
+
+
+# --- Limits known before the work: with 20 GiB available (MemAvailable stood in), a render, a dataset or an
+# export too large for it, or for Dr.Jit's 2^32 entries per array, is refused in one line with the estimate,
+# before anything is rendered or staged.
+GIB20 = "(20.0 GiB available)"
+ENTRIES = "entries in one array, more than Dr.Jit's 2^32 (4,294,967,296)"
+LIMIT_CASES = [
+    # tiny run: 22 raw channels (RGB, film alpha, 18 AOVs) x 32 bytes per pixel
+    (R, ["{run}/scene.xml", "--width", "12000", "--height", "12000"],
+     f"--width/--height: a 12000x12000 render needs about 94.4 GiB {GIB20}"),
+    (R, ["{run}/scene.xml", "--cameras", "{dataset}", "--width", "12000", "--height", "12000"],
+     f"--width/--height: a 12000x12000 render needs about 94.4 GiB {GIB20}"),
+    (R, ["{run}/scene.xml", "--path", "orbit", "--frames", "2", "--width", "12000", "--height", "12000"],
+     f"--width/--height: a 12000x12000 render needs about 95.2 GiB {GIB20}"),  # + 2 kept frames of 3 bytes
+    (R, ["{run}/scene.xml", "--width", "20000", "--height", "20000", "--spp", "4"],
+     f"--width/--height: a 20000x20000 render (4 spp, 22 channels) needs 9,200,000,000 {ENTRIES}"),
+    (R, ["{run}/scene.xml", "--width", "2000", "--height", "1000", "--spp", "4096"],
+     f"--width/--height: a 2000x1000 render (4096 spp, 22 channels) needs 8,192,000,000 {ENTRIES}"),
+    (M, [SCENE, "--views", "2", "--res", "12000x12000", "--spp", "1"],
+     f"--res: a 12000x12000 dataset needs about 25.7 GiB {GIB20}"),  # 192 bytes per pixel
+    (M, [SCENE, "--views", "2", "--res", "30000x30000", "--spp", "1"],
+     f"--res: a 30000x30000 view at 1 spp needs 4,500,000,000 {ENTRIES}"),  # the film's 5 channels
+    (M, [SCENE, "--views", "2", "--res", "4000x3000", "--spp", "512"],
+     f"--res: a 4000x3000 view at 512 spp needs 6,144,000,000 {ENTRIES}"),
+    (E, ["{run}/scene.xml", "--resolution", "2000,2000,2000"],
+     f"--resolution: a 2000x2000x2000 export needs about 239.4 GiB {GIB20}"),  # 32 bytes a value + the slab
+    (E, ["{run}/scene.xml", "--resolution", "70000,70000,1"],
+     f"--resolution: a 70000x70000x1 export needs 4,900,000,000 {ENTRIES}"),
+]
+
+
+@pytest.mark.parametrize("name,args,message", LIMIT_CASES, ids=[f"{c[0]}-{k}" for k, c in enumerate(LIMIT_CASES)])
+def test_too_large_a_job_is_refused_up_front_with_the_estimate(world, capsys, monkeypatch, name, args, message):
+    from mi_voldis.io import limits
+    monkeypatch.setattr(limits, "available_memory", lambda: 20 * limits.GIB)
+    out = os.path.join(world["base"], f"limits_{name}")
+    assert _boundary.run(script(name).main, [_p(world, a) for a in args] + ["--out", out, "--quiet"]) == 1
+    assert capsys.readouterr().err == f"error: {message}\n"
+    assert not os.path.exists(out) and not os.path.exists(out + ".partial")
+
+
+def test_memory_available_is_read_from_meminfo(tmp_path):
+    from mi_voldis.io import limits
+    (tmp_path / "meminfo").write_text("MemTotal:       32000000 kB\nMemAvailable:   2097152 kB\n")
+    assert limits.available_memory(str(tmp_path / "meminfo")) == 2 * limits.GIB
+    assert limits.available_memory(str(tmp_path / "none")) is None  # not Linux: nothing refused
+    (tmp_path / "old").write_text("MemTotal:       32000000 kB\n")
+    assert limits.available_memory(str(tmp_path / "old")) is None
+
+
+def test_an_export_region_outside_the_scene_is_refused(world, capsys):
+    from mi_voldis.scene import load_scene
+    field = load_scene(os.path.join(world["run"], "scene.xml")).integrator().fields["full"]
+    corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], np.float64)
+    box = corners @ field.to_world[:3, :3].T + field.to_world[:3, 3]
+    lo, hi = box.min(0), box.max(0)
+    out = os.path.join(world["base"], "region_out")
+    beyond = f"{hi[0] + 1:g},0,0,{hi[0] + 2:g},1,1"  # past the box on x, inside on y and z
+    assert _boundary.run(script(E).main, [os.path.join(world["run"], "scene.xml"), "--out", out,
+                                          "--region", beyond]) == 1
+    box_text = f"{','.join(f'{v:g}' for v in lo)} to {','.join(f'{v:g}' for v in hi)}"
+    assert capsys.readouterr().err == (f"error: --region {beyond} lies outside the scene's box {box_text} (field "
+                                       f"'full'): the export would be all zeros\n")
+    assert not os.path.exists(out)
+    # a region reaching into the box by a little is exported (zeros only where it lies outside)
+    partly = f"{hi[0] - 0.1:g},0,0,{hi[0] + 2:g},1,1"
+    assert _boundary.run(script(E).main, [os.path.join(world["run"], "scene.xml"), "--out", out, "--quiet",
+                                          "--region", partly, "--resolution", "4"]) == 0
+    assert os.path.isfile(os.path.join(out, "full_sigma_t.vol"))
 
 
 @pytest.mark.parametrize("dataset,holdout", [("notest", "0"), ("onetrain", "8")])

@@ -385,3 +385,19 @@ def test_a_camera_path_is_checked_field_by_field(tmp_path, change, message):
     with pytest.raises(ValueError) as err:
         read_nerfstudio_path(str(path), str(dpath))
     assert str(err.value).startswith(message.format(path=path, dp=dpath)), err.value
+
+
+@pytest.mark.parametrize("lo,hi,shown", [((1, 0, 0), (-1, 1, 1), "min [1, 0, 0] and max [-1, 1, 1]"),
+                                         ((0, 0, 0), (1, 0, 1), "min [0, 0, 0] and max [1, 0, 1]")])
+def test_a_grid_file_with_an_inverted_or_flat_box_is_refused_naming_it(tmp_path, lo, hi, shown):
+    """The box in a .vol header places the field when the scene gives no to_world: an inverted one would
+    mirror it, a flat one collapse it, without a word."""
+    import mitsuba as mi
+
+    from mi_voldis.io.vol import write_vol
+    for key, channels in (("density", 1), ("color", 3)):
+        write_vol(tmp_path / f"{key}.vol", np.zeros((2, 2, 2, channels)), lo, hi)
+    with pytest.raises(RuntimeError) as e:
+        mi.load_dict({"type": "radiance_field", "density": str(tmp_path / "density.vol"),
+                      "color": str(tmp_path / "color.vol")})
+    assert f"{tmp_path / 'density.vol'}: the grid's box needs min < max on every axis, got {shown}" in str(e.value)

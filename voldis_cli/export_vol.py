@@ -30,6 +30,51 @@ def numbers(text, count, flag, kind=float):
     return values
 
 
+def _box(values):
+    return ",".join(f"{v:g}" for v in values)
+
+
+def check_region(region, field, space, name):
+    """Refuse a ``--region`` holding no point of the field (outside its box the export is all zeros).
+    World space: the region against the field's world box. NDC: a 9^3 lattice of the region's points
+    mapped into the field. A contracted space maps the whole world into the field: any region holds it."""
+    import numpy as np
+    lo, hi = np.array(region[:3]), np.array(region[3:])
+    if space.is_world:
+        corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], np.float64)
+        world = corners @ field.to_world[:3, :3].T + field.to_world[:3, 3]
+        box_lo, box_hi = world.min(0), world.max(0)
+        if np.any(lo >= box_hi) or np.any(hi <= box_lo):
+            raise ValueError(f"--region {_box(region)} lies outside the scene's box {_box(box_lo)} to "
+                             f"{_box(box_hi)} (field '{name}'): the export would be all zeros")
+    elif not space.is_curved:
+        axes = [np.linspace(lo[a], hi[a], 9) for a in range(3)]
+        points = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+        with np.errstate(all="ignore"):  # points behind the reference camera have no NDC position
+            p = space.from_world_np(points)
+            local = p @ field.world_to_local[:3, :3].T + field.world_to_local[:3, 3]
+        if not np.any(np.all((local >= 0) & (local <= 1), axis=1)):
+            raise ValueError(f"--region {_box(region)} holds no point of field '{name}' (its box in NDC "
+                             f"space): the export would be all zeros")
+
+
+# Memory of an export per value: sigma_t (4 bytes) and albedo (12) held whole, and the albedo's copy
+# while it is written (12); then a z-slab of points in float64 and their lookups, under 256 bytes each.
+EXPORT_BYTES = 32
+SLAB_BYTES = 256
+
+
+def check_export_size(resolution):
+    """Refuse an export that cannot fit before sampling (:mod:`mi_voldis.io.limits`); a slab holds at
+    least one z-plane of points, each coordinate one Dr.Jit array."""
+    from mi_voldis.dense_export import SLAB_VERTICES
+    from mi_voldis.io.limits import check_entries, check_memory
+    nx, ny, nz = resolution
+    what = f"--resolution: a {nx}x{ny}x{nz} export"
+    check_entries(what, nx * ny)
+    check_memory(what, nx * ny * nz * EXPORT_BYTES + max(SLAB_VERTICES, nx * ny) * SLAB_BYTES)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scene", help="scene.xml of a run (scripts/train.py) or a task (scripts/optimize.py)")
@@ -61,6 +106,7 @@ def main(argv=None):
         lo, hi = np.array(args.region[:3]), np.array(args.region[3:])
         if not np.all(hi > lo):
             raise ValueError(f"--region needs x0 < x1, y0 < y1, z0 < z1, got {args.region}")
+        check_region(args.region, field, space, args.field)
     elif space.kind == "ndc":
         raise ValueError(f"{args.scene}: the fields live in NDC space, which has no finite world box: give --region")
     else:
@@ -76,6 +122,7 @@ def main(argv=None):
         resolution = [max(1, int(round(n * s / size.max()))) for s in size]
     else:
         resolution = args.resolution
+    check_export_size(resolution)
     sigma, albedo = export_dense(field, space, lo, hi, resolution)
     with staged(args.out, inputs=inputs, made_by="export_vol") as stage:
         path = write_export(stage, args.field, sigma, albedo, lo, hi, source=os.path.abspath(args.scene),

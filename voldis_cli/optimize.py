@@ -87,6 +87,12 @@ def main(argv=None):
     unknown = sorted(set(values) - set(cls.names()))
     if unknown:
         ap.error(f"--task {args.task} takes no {', '.join('--' + u.replace('_', '-') for u in unknown)}")
+    for flag, (name, _) in FLAGS.items():  # each flag's own value checked alone, so its error names the flag
+        if name in values:
+            try:
+                cls().replace(**{name: values[name]})
+            except ValueError as e:
+                raise ValueError(f"--{flag.replace('_', '-')}: {e}") from None
     settings = cls.from_sources(args.config, args.set, **values)
     from mi_voldis.tasks import run_task
     out = run_task(args.run, args.task, settings, args.dataset, progress=not args.quiet, out=args.out,

@@ -102,6 +102,8 @@ def main(argv=None):
         if size:
             from mi_voldis.cameras import Camera
             path_cameras = [Camera(c.to_world, c.fov_x, *size, c.principal) for c in path_cameras]
+        check_render_size("--width/--height" if size else args.path, scene,
+                          [(c.width, c.height, args.spp or 1) for c in path_cameras], kept=VIDEO_BYTES)
         fps = args.fps
         if fps is None:
             from mi_voldis.camera_paths import nerfstudio_fps
@@ -119,12 +121,41 @@ def main(argv=None):
         if not len(views):
             raise ValueError(f"{args.cameras}: no {args.split} views to render")
         cameras = [(os.path.splitext(ds.names[v])[0], ds.cameras[v]) for v in views]
+        check_render_size("--width/--height" if size else args.cameras, scene,
+                          [(*(size or (c.width, c.height)), args.spp or 1) for _, c in cameras])
     elif not scene.sensors():
         raise ValueError(f"{args.scene}: the scene has no sensor; give --cameras DATASET")
+    else:
+        check_render_size("--width/--height" if size else args.scene, scene,
+                          [(*(size or [int(v) for v in s.film().size()]), args.spp or s.sampler().sample_count())
+                           for s in scene.sensors()])
     with staged(args.out, inputs=inputs, made_by="render") as stage:
         written = render_scene_files(scene, stage, spp=args.spp, size=size, cameras=cameras)
     for path in written if not args.quiet else ():
         print(final(path, stage, args.out))
+
+
+# Memory of a render per pixel and raw channel (RGB, the film's alpha, the integrator's AOVs): the film,
+# the rendered tensor, its NumPy copy and the composited layers. A render of 256^2 to 2048^2 pixels
+# (21 channels, any spp: the march is one fused kernel whose rays are never stored) peaked at 25 bytes
+# per pixel and channel above the loaded scene; 32 leaves a margin.
+RENDER_BYTES = 32
+VIDEO_BYTES = 3  # a path's frames are kept for the video: 8-bit RGB per pixel and frame
+
+
+def check_render_size(source, scene, sizes, kept=0):
+    """Refuse a render that cannot fit before it starts (:mod:`mi_voldis.io.limits`): ``sizes`` the
+    (width, height, spp) of every image rendered (one after another), ``kept`` bytes per pixel kept of
+    every image until the end. ``source`` names what set the size (the flags, scene or dataset)."""
+    from mi_voldis.io.limits import check_entries, check_memory
+    channels = 4 + len(scene.integrator().aov_names())
+    # Mitsuba's wavefront holds a sample per pixel and spp, its film a value per pixel and channel
+    # plus the filter weight: each one Dr.Jit array
+    w, h, spp = max(sizes, key=lambda s: s[0] * s[1] * max(s[2], channels + 1))
+    check_entries(f"{source}: a {w}x{h} render ({spp} spp, {channels} channels)", w * h * max(spp, channels + 1))
+    w, h, _ = max(sizes, key=lambda s: s[0] * s[1])
+    kept = sum(a * b * kept for a, b, _ in sizes)
+    check_memory(f"{source}: a {w}x{h} render", w * h * RENDER_BYTES * channels + kept)
 
 
 def final(path, stage, out):

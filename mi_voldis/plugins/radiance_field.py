@@ -301,7 +301,7 @@ def _load_grid(props, key, name):
     if isinstance(value, str):
         path = str(mi.file_resolver().resolve(value))
         header = read_header(path)
-        bbox = (header[4], header[5])
+        bbox = _checked_box(path, header[4], header[5])
         value, source = read_vol(path), path
     elif isinstance(value, mi.VolumeGrid):
         value = grid_values(value)
@@ -312,6 +312,16 @@ def _load_grid(props, key, name):
     if not dr.all(dr.isfinite(tensor.array)):
         raise ValueError(f"{source}: '{key}' of field {name} contains NaN or Inf values")
     return tensor, bbox
+
+
+def _checked_box(path, lo, hi):
+    """(lo, hi) of a grid file's box; a box inverted, flat or not finite on any axis is refused naming
+    the file (the field would be mirrored or collapsed without a word)."""
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
+        raise ValueError(f"{path}: the grid's box needs min < max on every axis, got min "
+                         f"[{', '.join(f'{v:g}' for v in lo)}] and max [{', '.join(f'{v:g}' for v in hi)}]")
+    return lo, hi
 
 
 mi.register_medium("radiance_field", lambda props: RadianceField(props))
@@ -328,9 +338,13 @@ def _load_bricks(props, name):
         try:
             with np.load(path) as f:
                 table, data, vertices, brick = f["table"], f["data"], f["vertices"], int(f["brick"])
-                bbox = tuple(np.asarray(f["bbox"], np.float64)) if "bbox" in f.files else None
+                bbox = np.asarray(f["bbox"], np.float64) if "bbox" in f.files else None
         except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as e:
             raise ValueError(f"{path}: not a brick grid file ({e})") from None
+        if bbox is not None:
+            if bbox.shape != (2, 3):
+                raise ValueError(f"{path}: bbox must be [[x0, y0, z0], [x1, y1, z1]], got shape {bbox.shape}")
+            bbox = _checked_box(path, *bbox)
     else:
         for key in ("table", "data", "vertices", "brick"):
             if key not in props:

@@ -23,6 +23,7 @@ import numpy as np
 from ..data.conventions import mitsuba_to_opengl
 from ..data.llff import write_llff
 from ..io.images import linear_to_uint8, write_png
+from ..io.limits import check_entries, check_memory
 from ..io.run_folder import check_output, scene_files, staged
 from ..progress import progress_iter
 from ..transforms import compose, to_scalar_transform
@@ -115,6 +116,9 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
     spp = spp or rig["spp"]
     mi.file_resolver().prepend(os.path.dirname(os.path.abspath(scene_path)))
 
+    check_size("--res" if resolution else os.path.splitext(scene_path)[0] + ".json", width, height, spp)
+    check_seed(seed, views)
+
     cameras = make_cameras(rig, views, width, height)
     split = ["test" if holdout and k % holdout == 0 else "train" for k in range(views)]
     mv = rig["moved"]
@@ -154,6 +158,30 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
         with open(os.path.join(tmp, "transforms.json"), "w") as f:
             json.dump(meta, f, indent=1)
     return out
+
+
+# Memory of one view per pixel: the path tracer's film, the rendered image, its NumPy copies and the
+# written PNG's arrays. Datasets of 512^2 to 2048^2 pixels (any spp: Mitsuba's path tracer is one fused
+# kernel) grew by 146 bytes per pixel; 192 leaves a margin.
+DATASET_BYTES = 192
+FILM_CHANNELS = 5  # the largest film a pass renders: R, G, B, alpha and the filter weight
+SEED_STRIDE = 1_000_003  # the renders' seeds: seed * SEED_STRIDE + pass * views + view
+
+
+def check_size(source, width, height, spp):
+    """Refuse a dataset whose views cannot be rendered, before any is (:mod:`mi_voldis.io.limits`):
+    Mitsuba's wavefront (a sample per pixel and spp) and the film (pixels x channels) are Dr.Jit
+    arrays; the memory is that of one view. ``source``: the flag or file that set the size."""
+    check_entries(f"{source}: a {width}x{height} view at {spp} spp", width * height * max(spp, FILM_CHANNELS))
+    check_memory(f"{source}: a {width}x{height} dataset", width * height * DATASET_BYTES)
+
+
+def check_seed(seed, views):
+    """Every render's seed (:data:`SEED_STRIDE`) must be a 32-bit number, as Mitsuba takes it."""
+    top = (2 ** 32 - 1 - len(PASSES) * views) // SEED_STRIDE
+    if not 0 <= seed <= top:
+        raise ValueError(f"--seed must be from 0 to {top} for {views} views (each render's seed, seed x "
+                         f"{SEED_STRIDE} + view, is a 32-bit number), got {seed}")
 
 
 def spinnerf_tests(n):
@@ -199,7 +227,7 @@ def _render_views(folder, scene_path, scenes, cameras, split, width, height, spp
         renderer = _Renderer(scenes[kind], width, height, spp)
         todo = [k for k in range(views) if kind != "moved" or split[k] == "test"]
         for k in progress_iter(todo, f"{os.path.basename(scene_path)}: {kind}", progress):
-            img = renderer.render(cameras[k], seed * 1_000_003 + p * views + k)
+            img = renderer.render(cameras[k], seed * SEED_STRIDE + p * views + k)
             if kind == "coverage":
                 cov = np.round(np.clip(img.mean(axis=2), 0.0, 1.0) * 65535).astype(np.uint16)
                 write_png(os.path.join(folder, "coverage", names[k]), cov)

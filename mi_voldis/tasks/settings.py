@@ -44,6 +44,11 @@ def _rotation_error(value):
     return None
 
 
+# Larger angles are a user's slip: in float32 they have no degrees left (1e308 turns to inf on the way to
+# the device, where --scale 1e308 is refused)
+MAX_DEGREES = 1e6
+
+
 def parse_rotation(text):
     """'y:30' -> ('y', 30.0); 'X,Y,Z:DEG' with a vector axis -> ((X, Y, Z), DEG)."""
     what = "AXIS:DEGREES with AXIS x, y, z or X,Y,Z (e.g. 'y:30')"
@@ -59,6 +64,8 @@ def parse_rotation(text):
         raise ValueError(what) from None
     if not math.isfinite(degrees):
         raise ValueError(what)
+    if abs(degrees) > MAX_DEGREES:
+        raise ValueError(f"an angle of at most {MAX_DEGREES:g} degrees either way (a turn repeats every 360)")
     return axis, degrees
 
 
