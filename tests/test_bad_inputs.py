@@ -309,6 +309,26 @@ def test_an_export_region_outside_the_scene_is_refused(world, capsys):
     assert os.path.isfile(os.path.join(out, "full_sigma_t.vol"))
 
 
+@pytest.mark.parametrize("region,inside", [([-0.5, -0.5, 2, 0.5, 0.5, 3], True),  # in front of the camera
+                                           ([-0.5, -0.5, -3, 0.5, 0.5, -2], False),  # behind it
+                                           ([10, 0, 2, 11, 1, 3], False)])  # beside the frustum
+def test_an_export_region_outside_an_ndc_field_is_refused(region, inside):
+    from types import SimpleNamespace
+
+    from mi_voldis.space import SceneSpace
+    from voldis_cli.export_vol import check_region
+    space = SceneSpace("ndc", np.eye(4), near=1.0, scale=(1.0, 1.0))
+    field = SimpleNamespace(world_to_local=np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5],
+                                                     [0, 0, 0, 1]]))  # NDC's [-1, 1]^3 onto the unit cube
+    if inside:
+        check_region(region, field, space, "full")
+        return
+    with pytest.raises(ValueError) as e:
+        check_region(region, field, space, "full")
+    assert str(e.value) == (f"--region {','.join(f'{v:g}' for v in region)} holds no point of field 'full' (its box "
+                            "in NDC space): the export would be all zeros")
+
+
 @pytest.mark.parametrize("dataset,holdout", [("notest", "0"), ("onetrain", "8")])
 def test_unusual_but_legal_datasets_fit_to_the_end(world, tmp_path, dataset, holdout):
     """No test views (holdout 0), or a single training view: the fit runs to the end and says so."""
