@@ -32,10 +32,17 @@ def _minutes_error(value):
     return "'auto', null or a number of minutes (0.05 to 10000)"
 
 
-def _resolution_error(value):
-    if value == "auto" or (isinstance(value, int) and not isinstance(value, bool) and value >= 4):
-        return None
-    return "'auto' or a whole number >= 4"
+def _auto_or(whole, low=None, above=None):
+    """A check of 'auto' or a number (``whole``: a whole one) >= ``low`` / > ``above``."""
+    kind = "a whole number" if whole else "a number"
+    bound = f" >= {low}" if low is not None else f" > {above}" if above is not None else ""
+
+    def error(value):
+        number = isinstance(value, int if whole else (int, float)) and not isinstance(value, bool)
+        if value == "auto" or (number and (low is None or value >= low) and (above is None or value > above)):
+            return None
+        return f"'auto' or {kind}{bound}"
+    return error
 
 
 def _fractions_error(value):
@@ -43,18 +50,6 @@ def _fractions_error(value):
             and all(0 < v < 1 for v in value) and all(a < b for a, b in zip(value, value[1:])):
         return None
     return "a list of increasing fractions in (0, 1)"
-
-
-def _auto_or_positive(value):
-    if value == "auto" or (isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0):
-        return None
-    return "'auto' or a positive number"
-
-
-def _auto_or_count(value):
-    if value == "auto" or (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
-        return None
-    return "'auto' or a whole number >= 1"
 
 
 @dataclass
@@ -78,14 +73,14 @@ class FitConfig(Settings):
                                                   "in M samples/s ('auto': the backend's, mi_voldis.fit.schedule."
                                                   "BACKENDS: 18 on llvm, the project's 2-core machine; 270 on cuda): "
                                                   "the plan depends on the capture and the backend, not on how fast "
-                                                  "or busy this machine is", check=_auto_or_positive)
+                                                  "or busy this machine is", check=_auto_or(False, above=0))
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
     min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
                                    "overrunning the budget where it allows fewer (the resolution is chosen "
                                    "from the budget alone)", low=0)
     resolution: int | str = setting("auto", "final vertices along the scene box's longest side ('auto': a voxel "
                                             "about pixels_per_voxel pixels of the training views wide)",
-                                    check=_resolution_error)
+                                    check=_auto_or(True, low=4))
     pixels_per_voxel: float = setting(1.0, "'auto' resolution: voxel width in training-view pixels", above=0)
     max_resolution: int = setting(1024, "cap on the final resolution (and the density scale's unit)", low=8)
     min_observations: float = setting(64.0, "with a time budget, the final resolution lets its stage end this "
@@ -102,7 +97,7 @@ class FitConfig(Settings):
                                                check=_schedule_error)
     steps_bg: int = setting(150, "steps of the background refit (every bg_strategy but 'scratch')", low=0)
     batch_rays: int | str = setting("auto", "random rays per step, drawn across all training views ('auto': the "
-                                            "backend's, 8192 on llvm, 32768 on cuda)", check=_auto_or_count)
+                                            "backend's, 8192 on llvm, 32768 on cuda)", check=_auto_or(True, low=1))
     batch_tile: int = setting(1, "> 1: rays in tile x tile pixel tiles (coherent: faster marches, worse "
                                  "fits per second)", low=1)
     step_voxels: float = setting(0.5, "sample spacing along a ray, in voxels of the current grid", above=0)
