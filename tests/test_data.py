@@ -101,14 +101,15 @@ def test_llff_focal_is_rescaled_to_the_images_read(tmp_path):
 
 
 def test_the_fit_space_follows_the_cameras(tmp_path):
-    """'auto': a forward-facing capture is fitted in its NDC box (as the peers fit LLFF), a 360-degree one
-    without a stated box in contracted space, one with an aabb in its box; any is overridable."""
+    """'auto': a capture without a stated box is fitted in contracted space, forward-facing or not (its NDC
+    box on request), one with an aabb in its box."""
     from mi_voldis.data.scene_box import fitting_box
     cams = [Camera(look_at([0.1 * k, 0.0, -3.0], [0.0, 0.0, 0.0]), 50.0, 48, 36) for k in range(3)]
     write_images(str(tmp_path / "ff" / "images"), 3, 36, 48)
     write_llff(str(tmp_path / "ff"), cams, [(1.0, 5.0)] * 3)
     forward = load_dataset(str(tmp_path / "ff"))
-    assert fitting_box(forward, "auto").kind == "ndc" and fitting_box(forward, "contract").kind == "contract"
+    assert forward.box.kind == "ndc"  # what the loader offers
+    assert fitting_box(forward, "auto").kind == "contract" and fitting_box(forward, "ndc").kind == "ndc"
     orbit = [camera()] + [Camera(look_at([3 * np.sin(a), 0.5, -3 * np.cos(a)], [0.0, 0.0, 0.0]), 50.0, 24, 18)
                           for a in (1.5, 3.0, 4.5)]
     names = write_images(str(tmp_path / "o" / "images"), 4, 18, 24)

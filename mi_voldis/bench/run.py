@@ -114,7 +114,7 @@ TRUTH_SCENES = SCENES + [f"random{k}" for k in RANDOM_SEEDS]  # the scenes with 
 CAPTURES = ["fern", "horns", "statue", "garden"]  # ../shared/data; skipped when absent
 VARIANTS = {
     "tabletop": {"dense (carve=false)": ["carve=false"]},
-    "fern": {"contracted space (the default before NDC)": ["space=\"contract\""]},
+    "fern": {"NDC (space=ndc, as the peers fit LLFF)": ["space=\"ndc\""]},
 }
 QUICK_SETS = ["minutes=null", "steps_full=200", "steps_bg=40", "resolution_schedule=[[0,32],[80,64]]",
               "sh_degree=0", "occupancy_at_step=80", "eval_every=50"]
@@ -153,9 +153,13 @@ def finished(out, dataset, sets, ignore=()):
             config = json.load(f)
     except (OSError, ValueError):
         return False
-    record = config.pop("dataset", {})
+    from ..fit.schedule import backend
+    from ..settings import RECORD_KEYS
+    record = config.get("dataset", {})
+    for key in RECORD_KEYS:  # what was fitted, on what: not settings
+        config.pop(key, None)
     same_data = os.path.realpath(record.get("path", "")) == os.path.realpath(dataset)
-    expected = FitConfig.from_sources(None, sets).to_dict()
+    expected = FitConfig.from_sources(None, sets).for_backend(backend()).to_dict()  # 'auto' as a run records it
     for key in ignore:
         config.pop(key, None), expected.pop(key, None)
     return os.path.isfile(os.path.join(out, "metrics.json")) and same_data and config == expected
