@@ -144,7 +144,9 @@ CASES = [
     (OPT, ["{run}", "--task", "transform", "--scale", "0"], 1, "scale must be a number >= 0.001"),
     (OPT, ["{run}", "--task", "transform", "--scale", "1e-9"], 1, "scale must be a number >= 0.001"),
     (OPT, ["{run}", "--task", "transform", "--scale", "big"], 1, "--scale expects a float"),
-    (OPT, ["{run}", "--task", "transform", "--translate", "nan,0,0"], 1, "translate must be three finite numbers"),
+    (OPT, ["{run}", "--task", "transform", "--translate", "nan,0,0"], 1, "translate must be three numbers [x, y, z] of "
+     "at most 1e+06 either way"),
+    (OPT, ["{run}", "--task", "transform", "--translate", "1e308,0,0"], 1, "translate must be three numbers"),
     (OPT, ["{run}", "--task", "transform", "--translate", "1,2"], 1, "--translate expects X,Y,Z"),
     (OPT, ["{run}", "--task", "transform", "--rotate", "y:nan"], 1, "rotate must be"),
     (OPT, ["{run}", "--task", "transform", "--rotate", "q:30"], 1, "rotate must be"),

@@ -11,12 +11,16 @@ import numpy as np
 from ..render.mixing import RULES
 from ..settings import Settings, setting
 
+# Larger coordinates are a user's slip: the fields are float32 (1e308 turns to inf on the device), and at
+# 1e6 world units a float32 position keeps no sub-unit precision
+MAX_COORDINATE = 1e6
+
 
 def _vector_error(value):
     if value is None or (isinstance(value, list) and len(value) == 3 and all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)):
+            isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) <= MAX_COORDINATE for v in value)):
         return None
-    return "three finite numbers [x, y, z]"
+    return f"three numbers [x, y, z] of at most {MAX_COORDINATE:g} either way"
 
 
 def _matrix_error(value):
@@ -27,8 +31,8 @@ def _matrix_error(value):
         m = np.asarray(value, np.float64)
     except (TypeError, ValueError):
         return "a 4x4 matrix of numbers"
-    if m.shape != (4, 4) or not np.all(np.isfinite(m)):
-        return f"a finite 4x4 matrix (got shape {m.shape})"
+    if m.shape != (4, 4) or not np.all(np.abs(m) <= MAX_COORDINATE):
+        return f"a 4x4 matrix of numbers of at most {MAX_COORDINATE:g} either way (got shape {m.shape})"
     if not np.allclose(m[3], [0, 0, 0, 1]) or abs(np.linalg.det(m[:3, :3])) < 1e-9:
         return "an invertible affine matrix (last row 0, 0, 0, 1)"
     return None
