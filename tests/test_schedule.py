@@ -45,7 +45,7 @@ PIXELS = 40_000_000  # training pixels: enough for any grid below
 
 
 def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_of_the_last_stage():
-    cfg = FitConfig().for_backend("llvm")
+    cfg = FitConfig().for_backend("llvm").replace(max_memory_gib=1e4)  # memory no bound here
     seconds, budget = 0.01, 600.0
     r = affordable_resolution(cfg, 64, seconds, budget, SURVEY, PIXELS)
     last_share = 1.0 - cfg.stage_starts[-1]
@@ -66,6 +66,15 @@ def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_
     few = affordable_resolution(cfg, 64, seconds, 1e6, SURVEY, 200_000)
     assert SURVEY["surface_cells"] * (few / 64) ** 2 <= 200_000 * SURVEY["ray_hits"] < \
         SURVEY["surface_cells"] * ((few + 16) / 64) ** 2
+
+
+def test_affordable_resolution_keeps_the_estimated_memory_within_max_memory_gib():
+    from mi_voldis.fit.schedule import BYTES_PER_SURFACE_CELL
+    cfg = FitConfig().for_backend("llvm")
+    r = affordable_resolution(cfg, 64, 1e-6, 1e6, SURVEY, PIXELS)  # time and pixels buy any grid
+    bytes_at = lambda res: SURVEY["surface_cells"] * (res / 64) ** 2 * BYTES_PER_SURFACE_CELL  # noqa: E731
+    assert bytes_at(r) <= cfg.max_memory_gib * 2 ** 30 < bytes_at(r + 16)
+    assert affordable_resolution(cfg.replace(max_memory_gib=16.0), 64, 1e-6, 1e6, SURVEY, PIXELS) == 2 * r
 
 
 def test_surface_cells_is_the_effective_number_of_cells_rays_end_in():

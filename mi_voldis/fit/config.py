@@ -87,6 +87,9 @@ class FitConfig(Settings):
                                             "many training rays in every cell where rays end (surfaces): a grid "
                                             "seen too few times is worse than a coarser one seen often",
                                       above=0)
+    max_memory_gib: float = setting(4.0, "with resolution 'auto', the fit's peak memory is estimated from the "
+                                         "final grid's surface cells (mi_voldis.fit.schedule."
+                                         "BYTES_PER_SURFACE_CELL) to stay within this many GiB", above=0)
     coarse_resolution: int = setting(64, "resolution of the first stage", low=4)
     stages: int = setting(4, "coarse-to-fine stages, each doubling the resolution", low=1, high=8)
     stage_starts: list = setting([0.1, 0.2, 0.35], "where stages 2, 3, ... start, as fractions of steps_full",

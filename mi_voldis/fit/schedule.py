@@ -152,6 +152,13 @@ def stages(cfg, coarse, final):
     return list(zip(starts, levels))
 
 
+# A fit's peak memory per effective surface cell of its final grid: kept vertices per cell (50 to 150 on
+# the real captures: bricks of 8^3 vertices around thin, folded surfaces) times the peak RSS per kept
+# vertex of the full field (365 to 580 bytes: both fields, their optimiser state, the photos). The worst
+# of both, so that the estimate bounds the runs measured (reports/notes.md).
+BYTES_PER_SURFACE_CELL = 150 * 580
+
+
 def affordable_resolution(cfg, coarse, seconds_per_step, budget_seconds, survey, pixels):
     """The finest resolution R whose last stage (its share of the budget, stage_starts[-1] to the end)
     still ends ``min_observations`` training rays in each cell where rays end, a step at resolution R
@@ -165,13 +172,15 @@ def affordable_resolution(cfg, coarse, seconds_per_step, budget_seconds, survey,
         rays(R) / (cells (R / R_s)^2) >= min_observations
         => R <= coarse (share budget batch hits R_s^2 / (seconds cells coarse^2 min_observations))^(1 / (e + 2))
         cells (R / R_s)^2 <= pixels hits / pixels_per_voxel^2
+        cells (R / R_s)^2 BYTES_PER_SURFACE_CELL <= max_memory_gib
     """
     share = 1.0 - (cfg.stage_starts[-1] if cfg.stage_starts else 0.0)
     rays = share * budget_seconds / seconds_per_step * cfg.batch_rays * survey["ray_hits"]
     cells = survey["surface_cells"] * (coarse / survey["surface_resolution"]) ** 2  # at the coarse resolution
     ratio = (rays / (cells * cfg.min_observations)) ** (1.0 / (COST_EXPONENT + 2.0))
     seen = (pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5
-    return int(max(coarse, 16 * np.floor(coarse * min(ratio, seen) / 16)))
+    memory = (cfg.max_memory_gib * 2 ** 30 / BYTES_PER_SURFACE_CELL / cells) ** 0.5
+    return int(max(coarse, 16 * np.floor(coarse * min(ratio, seen, memory) / 16)))
 
 
 def steps_for(plan_stages, seconds_per_step, budget_seconds):
