@@ -11,7 +11,7 @@ from mi_voldis.device import from_numpy
 from mi_voldis.field_state import new_field, vertex_positions
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.lift import lift_pixels, write_surface
-from mi_voldis.fit.visibility import seen_elsewhere
+from mi_voldis.fit.visibility import before_hidden_surface, seen_elsewhere
 from mi_voldis.inpaint2d import INPAINTERS, fill_disparity, harmonic_fill, has_contrib, inpainter, resolve
 from mi_voldis.metrics import dilate, object_residue
 from mi_voldis.render.views import render_camera
@@ -203,6 +203,29 @@ def test_visibility_of_a_plane_behind_an_occluder_from_two_cameras():
     clear = ~edge[iy, ix]
     assert expected[clear].any() and (~expected[clear]).any()  # both cases occur
     np.testing.assert_array_equal(seen[clear], expected[clear])
+
+
+def test_space_before_the_hidden_plane_is_voted_in_front_and_the_plane_itself_is_not():
+    """A sphere above the plane y = -0.5, seen by two cameras, their depth maps the sphere's inside its
+    masks: the plane the sphere hides is the masks' surroundings continued (a plane's disparity is
+    affine: exact). Points on the way from a camera to that plane, inside the mask and more than the
+    margin before it, are in front (the sphere's inside among them); the plane's points and those below
+    it are not; points no mask holds get no vote."""
+    centre, radius, cams, depths, masks = sphere_over_plane_from_two_cameras()
+    a = cams[0]
+    py, px = np.nonzero(masks[0] & ~dilate(~masks[0], 2))
+    o, d = pixel_rays(a, px + 0.5, py + 0.5)
+    floor = plane_depth(a)[py, px]
+    on_plane = o + floor[:, None] * d
+    args = (cams, [np.where(np.isfinite(x), x, np.nan) for x in depths], masks)
+    assert not before_hidden_surface(on_plane, *args).any()
+    assert not before_hidden_surface(o + 1.02 * floor[:, None] * d, *args).any()  # just behind it
+    before = o + 0.8 * floor[:, None] * d  # a fifth of the way short of it
+    assert before_hidden_surface(before, *args).all()
+    inside = centre + radius * 0.5 * np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])
+    assert before_hidden_surface(inside, *args).all()
+    far = np.array([[3.0, 0.5, -3.0], [-2.0, 0.0, 2.5]])  # in no mask
+    assert not before_hidden_surface(far, *args).any()
 
 
 def test_the_hull_takes_in_what_an_occluder_hides_but_nothing_behind_a_surface():
@@ -645,6 +668,27 @@ def test_the_cells_before_the_object_on_masked_rays_join_it_where_no_view_sees_t
         near = np.minimum(near, np.linalg.norm(rel - t[..., None] * d[None], axis=-1).min(axis=1))
     assert (near <= np.sqrt(3) * voxel).all()  # a corner of a cell some such ray samples
     assert (np.linalg.norm(pts[added] - centre, axis=1) >= 0.3 - voxel).all()  # in front, not inside
+
+
+def test_hole_carving_adds_the_unseen_space_before_the_floor_and_nothing_on_or_under_it(tmp_path):
+    """With ``hole_carve`` the object's cells are those without it and, in addition, unseen hull cells
+    the masked views vote in front of the floor the sphere hides: the sphere's haze shell among them
+    (above the floor, some view's masked ray passes through it before the floor); no floor cell, no
+    cell below the floor, and none that a view sees unmasked joins."""
+    ds, _, hull, obj, pts, real = object_cells(tmp_path, hole_carve=True)
+    _, _, _, without, _, _ = object_cells(tmp_path, hole_carve=False)
+    voxel = 2.0 / 39
+    centre = np.array([0.0, FLOOR_Y + 0.3, 0.0])
+    r = np.linalg.norm(pts - centre, axis=1)
+    assert (obj >= without).all()
+    added = obj & ~without
+    assert added.sum() > 20
+    assert not (added & ~hull).any()
+    assert not (added & sphere_seen_unmasked(ds, pts, voxel, centre)).any()
+    assert not added[pts[:, 1] < FLOOR_Y + 0.5 * voxel].any()  # the floor and what lies under it stay
+    shell = real & hull & (r > 0.3 + 0.5 * voxel) & (r < 0.3 + 2.5 * voxel) & (pts[:, 1] > FLOOR_Y + 3 * voxel)
+    shell &= ~sphere_seen_unmasked(ds, pts, voxel, centre)
+    assert shell.sum() > 20 and obj[shell].mean() > 0.9
 
 
 def test_the_inpainting_hole_takes_in_occluders_in_front_of_the_object_only():

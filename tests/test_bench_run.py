@@ -1,5 +1,7 @@
-"""What the benchmark's fit record measures of a run folder."""
+"""What the benchmark measures of a run folder, and how it reads the removal family."""
 import os
+
+import pytest
 
 from mi_voldis.bench.run import folder_bytes
 
@@ -35,3 +37,55 @@ def test_a_finished_run_is_recognised_with_its_resolved_settings(tiny_run):
     assert finished(tiny_run, dataset, TINY_FIT)
     assert not finished(tiny_run, dataset, TINY_FIT + ["seed=1"])  # other settings: fitted again
     assert not finished(tiny_run, os.path.dirname(dataset), TINY_FIT)  # another dataset
+
+
+def family_results(margins):
+    """Removal-family results (mi_voldis.bench.family) with the default row's in-mask PSNR 20 + margin
+    over Telea (20) and Navier-Stokes (19) per scene: {scene: (half, margin)}."""
+    scenes = {}
+    for scene, (half, margin) in margins.items():
+        methods = {"volume": {"psnr_mask": 20.0 + margin, "psnr_unseen": 18.0, "consistency_psnr": 30.0,
+                              "fg_coverage_iou": 0.95, "bg_haze_mask": 0.02, "bg_haze_outside": 0.03,
+                              "residue": 0.05},
+                   "telea": {"psnr_mask": 20.0, "consistency_psnr": 25.0},
+                   "ns": {"psnr_mask": 19.0, "consistency_psnr": 26.5}}
+        scenes[scene] = {"half": half, "kind": "arc", "seed": 1000,
+                         "strategies": {s: {"methods": methods} for s in ("guided", "guided-hole_carve")}}
+    return {"date": "2026-11-26", "seconds": 60.0, "machine": {"cpu": "test", "cores": 2}, "scenes": scenes}
+
+
+def test_the_family_report_leads_with_the_check_halfs_worst_scene_not_the_tunings():
+    from mi_voldis.bench.family import lead, summary
+    results = family_results({"family00": ("tuning", -3.0), "family10": ("check", 2.5), "family11": ("check", 1.5),
+                              "family12": ("check", 4.0)})
+    check = summary(results, "guided", "check")
+    assert check["worst"] == ("family11", 1.5) and check["n"] == 3
+    assert check["margins"] == [1.5, 2.5, 4.0]
+    assert sorted(check["met"]) == ["family10", "family12"]  # +2 dB, +3.5 dB consistency, IoU 0.95
+    assert summary(results, "guided", "tuning")["worst"] == ("family00", -3.0)
+    text = "\n".join(lead(results))
+    assert "check half: worst family11 +1.50 dB" in text and "2 of 3 scenes meet every target" in text
+    assert text.index("### Check half") < text.index("### Tuning half")
+
+
+def test_the_family_section_offers_the_family_and_refuses_other_scenes():
+    from mi_voldis.bench.run import section_scenes
+    assert section_scenes("family") == [f"family{k:02d}" for k in range(20)]
+    assert section_scenes("family", ["family03"]) == ["family03"]
+    with pytest.raises(ValueError, match="random0 not among"):
+        section_scenes("family", ["random0"])
+
+
+def test_the_removal_report_leads_with_the_family_and_stands_alone_without_the_removal_section(tmp_path):
+    import json
+
+    from mi_voldis.bench.family import write_family
+    results = family_results({"family00": ("tuning", 1.0), "family10": ("check", 2.0)})
+    alone = write_family(results, str(tmp_path), "python scripts/bench.py --family")
+    assert os.path.basename(alone) == "family.md" and "worst family10 +2.00 dB" in open(alone).read()
+    removal = {"date": "2026-11-26", "seconds": 60.0, "machine": {"cpu": "test", "cores": 2, "variant": "llvm_ad_rgb"},
+               "scenes": {}}
+    (tmp_path / "removal.json").write_text(json.dumps(removal))
+    text = open(write_family(results, str(tmp_path), "python scripts/bench.py --family")).read()
+    assert text.startswith("# Removal by background strategy")
+    assert text.index("The removal family") < text.index("The scenes the strategies were first chosen on")

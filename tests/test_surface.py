@@ -106,3 +106,38 @@ def test_mask_surfaces_tell_a_background_that_continues_the_wall_from_one_that_k
     else:
         assert abs(out["background"] - out["object"]) < 2 * VOXEL
         assert out["in_hull"] > 0.95
+
+
+def test_the_backgrounds_haze_is_counted_inside_the_region_it_hangs_in_and_not_outside():
+    """A background field: the wall, and fog of extinction SIGMA only in a column |x|, |y| < HALF = 0.15 in front
+    of it (z <= FOG_END). Its haze inside the pixels whose rays cross the column's middle is
+    Beer-Lambert's 1 - exp(-SIGMA L) as the fog's depth L, outside it zero: a veil in the hole."""
+    from mi_voldis.fit.report import background_haze
+    HALF = 0.15
+    lo, hi = -np.ones(3), np.ones(3)
+    field = new_field(lo, hi, RES, 0, -20.0, 1.0 / VOXEL)
+    pts, real = vertex_positions(field)
+    values = np.array(field.data).reshape(-1, field.width)
+    block = values[: field.layout.vertices_per_brick].copy()
+    column = (np.abs(pts[:, 0]) < HALF) & (np.abs(pts[:, 1]) < HALF) & (pts[:, 2] <= FOG_END)
+    sigma = np.where(pts[:, 2] >= WALL_Z, 200.0, np.where(column, SIGMA, 0.0)) * VOXEL
+    values[:, 0] = np.where(real & (sigma > 0), np.log(np.expm1(np.maximum(sigma, 1e-12))), -20.0)
+    values[: field.layout.vertices_per_brick] = block
+    field.data = from_numpy(mi.Float, values.ravel())
+    wall = wall_and_box(False)
+    props = integrator_properties(SceneSpace("world"), samples=512, step_size=0.25 * VOXEL)
+    integrator = build_integrator({"full": wall.plugin(), "bg": field.plugin()}, props)
+    camera = Camera(look_at([0.0, 0.0, -3.0], [0.0, 0.0, 0.0]), 30.0, 24, 18)
+    py, px = np.mgrid[0:camera.height, 0:camera.width]
+    o, d = pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
+    at = o + (FOG_END - o[:, 2:3]) / d[:, 2:3] * d  # where each ray leaves the fog's slab
+    start = o + (-1.0 - o[:, 2:3]) / d[:, 2:3] * d
+    through = (np.abs(at[:, :2]).max(1) < HALF - VOXEL) & (np.abs(start[:, :2]).max(1) < HALF - VOXEL)
+    clear = (np.abs(at[:, :2]).max(1) > HALF + VOXEL) & (np.abs(start[:, :2]).max(1) > HALF + VOXEL)
+    through, clear = through.reshape(camera.height, camera.width), clear.reshape(camera.height, camera.width)
+    assert through.sum() > 10 and clear.sum() > 10
+    inside, outside = background_haze(integrator, camera, through).values()
+    expected = 1.0 - np.exp(-SIGMA * (FOG_END + 1.0))
+    assert abs(inside - expected) < 0.05, (inside, expected)
+    assert background_haze(integrator, camera, ~clear)["bg_haze_outside"] < 1e-3
+    assert outside < inside

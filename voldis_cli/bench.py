@@ -4,6 +4,7 @@
     python scripts/bench.py --removal [--work out/bench] [--report reports] [--scenes ...]
     python scripts/bench.py --masks [--work out/bench] [--report reports] [--scenes ...]
     python scripts/bench.py --effects [--work out/bench] [--report reports] [--scenes ...]
+    python scripts/bench.py --family [--work out/bench] [--report reports] [--scenes family00,...]
     python scripts/bench.py --step-profile [--rays random|tiles]   (a training step by kernel, record on and off)
 
 Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
@@ -11,7 +12,9 @@ PNG plots. --quick is a smoke run of a few minutes; the full run fits every bund
 random seed with the default budgets (hours on 2 cores); --scenes picks some. --removal writes
 reports/removal.md instead: every background strategy on the bundled and random ground-truth scenes;
 --masks writes reports/masks.md: masks from two views (scripts/make_masks.py) and removal with them;
---effects writes reports/effects.md: removal with the object's shadow given as effect masks.
+--effects writes reports/effects.md: removal with the object's shadow given as effect masks;
+--family fits the removal family (20 random scenes, mi_voldis/synth/family.py: ten tune, ten check) and
+rewrites reports/removal.md to lead with the check half's worst scene (reports/family.json).
 """
 import argparse
 import os
@@ -37,6 +40,8 @@ def main(argv=None):
                     help="only the masks section: masks from two views, and removal with them")
     ap.add_argument("--effects", action="store_true",
                     help="only the effects section: removal with the object's shadow given as effect masks")
+    ap.add_argument("--family", action="store_true",
+                    help="only the removal family: the default judged on ten scenes it was not tuned on")
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--quiet", action="store_true", help="print nothing but errors (the children run quietly anyway)")
     args = ap.parse_args(argv)
@@ -50,9 +55,10 @@ def main(argv=None):
                           "no_record": step_profile(rays=args.rays, record=False)}, indent=1))
         return
     from mi_voldis.bench import report
+    from mi_voldis.bench.family import run_family, write_family
     from mi_voldis.bench.run import run_all, run_effects, run_masks, run_removal, section_scenes
     scenes = args.scenes.split(",") if args.scenes else None
-    section = next((flag for flag in ("removal", "masks", "effects") if getattr(args, flag)),
+    section = next((flag for flag in ("removal", "masks", "effects", "family") if getattr(args, flag)),
                    "quick" if args.quick else "all")
     try:  # before anything runs: a bad --scenes never overwrites the last report
         section_scenes(section, scenes)
@@ -60,7 +66,8 @@ def main(argv=None):
         raise SystemExit(f"error: {e}") from None
     for flag, (measure, write) in {"removal": (run_removal, report.write_removal),
                                    "masks": (run_masks, report.write_masks),
-                                   "effects": (run_effects, report.write_effects)}.items():
+                                   "effects": (run_effects, report.write_effects),
+                                   "family": (run_family, write_family)}.items():
         if getattr(args, flag):  # one section alone, with its own report
             results = measure(os.path.abspath(args.work), args.report, scenes)
             path = write(results, args.report, f"python scripts/bench.py --{flag}" +

@@ -2,12 +2,15 @@
 
     python scripts/make_dataset.py scenes/NAME.xml --out data/NAME [--views N --res WxH --spp S --seed K]
     python scripts/make_dataset.py --random SEED --out data/random_SEED [--views N --res WxH --spp S]
+    python scripts/make_dataset.py --family K --out data/familyK
     python scripts/make_dataset.py scenes/NAME.xml --out data/NAME_spinnerf --layout spinnerf [--views 100]
 
 The rig (cameras, resolution, the "moved" edit) comes from scenes/NAME.json; the flags override it.
 --random composes a scene from the seed (mi_voldis/synth/random_scene.py: layout, object parts,
 materials, a mirror sometimes, an occluder sometimes, a shadow-casting light, a 360-degree or
-forward-facing rig) and keeps it in the dataset's scene/ folder. --layout spinnerf writes SPIn-NeRF's
+forward-facing rig) and keeps it in the dataset's scene/ folder. --family K makes scene K of the removal
+family (mi_voldis/synth/family.py: 20 harder random scenes, hand-held rigs, close walls, area lights;
+the first ten tune the defaults, the last ten judge them). --layout spinnerf writes SPIn-NeRF's
 LLFF layout: the first 40% of the views by name without the object (images_4/test_label/ marks where
 it stood), the rest with it (images_4/label/).
 """
@@ -22,6 +25,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scene", nargs="?", help="Mitsuba XML scene whose object shapes have ids starting with 'object'")
     ap.add_argument("--random", type=int, metavar="SEED", help="a random scene made from SEED instead of SCENE")
+    ap.add_argument("--family", type=int, metavar="K", help="scene K (0 to 19) of the removal family instead of SCENE")
     ap.add_argument("--out", required=True, help="output dataset folder (replaced when complete)")
     ap.add_argument("--views", type=positive, help="number of views")
     ap.add_argument("--res", help="resolution WxH, e.g. 160x120")
@@ -45,8 +49,11 @@ def main(argv=None):
             assert len(resolution) == 2 and min(resolution) > 0
         except (ValueError, AssertionError):
             ap.error(f"--res must look like 160x120, got '{args.res}'")
-    if (args.scene is None) == (args.random is None):
-        ap.error("give a SCENE file or --random SEED (one of them)")
+    if sum(x is not None for x in (args.scene, args.random, args.family)) != 1:
+        ap.error("give a SCENE file, --random SEED or --family K (one of them)")
+    from mi_voldis.synth import family
+    if args.family is not None and not 0 <= args.family < family.SIZE:
+        ap.error(f"--family must be from 0 to {family.SIZE - 1}, got {args.family}")
     if args.random is not None and args.random < 0:
         ap.error(f"--random must be a seed >= 0, got {args.random}")
     if args.scene is not None and not os.path.isfile(args.scene):
@@ -62,8 +69,9 @@ def main(argv=None):
     import tempfile
 
     from mi_voldis.synth.random_scene import write_random_scene
+    seed, kind = (args.random, None) if args.family is None else family.scene(args.family)
     with tempfile.TemporaryDirectory() as folder:
-        scene = write_random_scene(args.random, folder, args.views)
+        scene = write_random_scene(seed, folder, args.views, kind)
         out = make_dataset(scene, args.out, args.views, resolution, args.spp, args.seed, args.holdout,
                            progress=not args.quiet, scene_folder=folder, layout=args.layout)
     if not args.quiet:

@@ -21,7 +21,7 @@ import subprocess
 import sys
 import time
 
-from ..synth import bundled_scene
+from ..synth import bundled_scene, family
 from . import content, machine, rays, throughput
 from .strategies import BACKGROUND_SETTINGS
 
@@ -45,8 +45,10 @@ def section_scenes(section, scenes=None):
     """The scenes a section ("all", "quick", "removal", "masks", "effects") would run, of ``scenes`` if given (the real
     captures only where present). Raises ValueError naming an unknown scene, or when nothing is left to
     run (then no report is written over the last one)."""
-    captures = {"all": CAPTURES, "quick": [], "removal": REMOVAL_CAPTURES, "masks": [], "effects": []}[section]
-    offered = {"all": SCENES, "quick": SCENES[:1]}.get(section, TRUTH_SCENES) + captures
+    captures = {"all": CAPTURES, "quick": [], "removal": REMOVAL_CAPTURES, "masks": [], "effects": [],
+                "family": []}[section]
+    family_scenes = [family.name(k) for k in range(family.SIZE)]
+    offered = {"all": SCENES, "quick": SCENES[:1], "family": family_scenes}.get(section, TRUTH_SCENES) + captures
     unknown = [s for s in scenes or [] if s not in offered]
     if unknown:
         raise ValueError(f"--scenes: {', '.join(unknown)} not among this section's scenes ({', '.join(offered)})")
@@ -183,7 +185,9 @@ def time_to_within(curve, best, tolerance=0.5):
 def make_data(scene, out, log_dir, quick):
     """A bundled scene's dataset, or (``scene`` 'random<SEED>') a random scene's, rendered once."""
     if not os.path.isfile(os.path.join(out, "transforms.json")):
-        source = ["--random", scene[len("random"):]] if scene.startswith("random") else [bundled_scene(scene)]
+        k = family.index(scene)
+        source = ["--family", str(k)] if k is not None else \
+            ["--random", scene[len("random"):]] if scene.startswith("random") else [bundled_scene(scene)]
         args = ["scripts/make_dataset.py"] + source + ["--out", out]
         if quick:
             args += ["--views", "24", "--spp", "32"]
@@ -198,14 +202,14 @@ STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided+shadow_contrast=0",
               "guided+keep_seen_gap=0", "guided+keep_seen_gap=4"]
 
 
-def ground_truth_fits(work, scenes, results):
+def ground_truth_fits(work, scenes, results, among=None):
     """(scene, dataset, default fit kept with its checkpoint, logs folder) of every ground-truth scene
-    (bundled and random; ``scenes`` picks some), made when missing; ``results['seconds']`` is set when
-    the loop ends."""
+    of ``among`` (default: bundled and random; ``scenes`` picks some), made when missing;
+    ``results['seconds']`` is set when the loop ends."""
     logs = os.path.join(work, "logs")
     os.makedirs(logs, exist_ok=True)
     t0 = time.perf_counter()
-    for scene in [s for s in TRUTH_SCENES if not scenes or s in scenes]:
+    for scene in [s for s in among or TRUTH_SCENES if not scenes or s in scenes]:
         data = make_data(scene, os.path.join(work, "data", scene), logs, False)
         yield scene, data, fit(data, os.path.join(work, "runs", f"{scene}_0"), [], logs, keep=True), logs
     results["seconds"] = time.perf_counter() - t0

@@ -3,7 +3,8 @@
     python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET] [--set KEY=VALUE ...]
 
 RUN: a finished fit kept with ``--keep-checkpoints``; its final state's full field is reused, the
-background is fitted again with ``bg_strategy=STRATEGY`` (the background phase's other settings,
+background is fitted again with ``bg_strategy=STRATEGY`` (where RUN's settings are those very ones, its own
+background is scored instead: the same computation) (the background phase's other settings,
 :data:`BACKGROUND_SETTINGS`, as today's defaults, whatever RUN recorded; every other one as RUN's
 config.json), and
 OUT receives ``metrics.json``, the background of each held-out view as PNG and, where the foreground is
@@ -32,7 +33,8 @@ PREVIEWS = 4  # held-out views previewed when the dataset has neither ground tru
 # the background strategies' own settings (bg_strategy first): a refit takes today's defaults for them, so
 # that a run fitted under older defaults is scored with the strategy the default command runs now
 BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
-                       "object_front", "keep_seen", "keep_seen_gap", "hull_occluders", "shadow_contrast")
+                       "object_front", "hole_carve", "hole_carve_margin", "keep_seen", "keep_seen_gap",
+                       "hull_occluders", "shadow_contrast")
 
 
 def refit_config(run, strategy, sets=()):
@@ -44,9 +46,20 @@ def refit_config(run, strategy, sets=()):
     return FitConfig.from_sources(os.path.join(run, "config.json"), list(sets), bg_strategy=strategy, **background)
 
 
+def same_settings(run, cfg):
+    """``run``'s config.json holds exactly the settings ``cfg`` resolves to on this backend (what was
+    fitted on what, :data:`~mi_voldis.settings.RECORD_KEYS`, aside)."""
+    from ..fit.schedule import backend
+    from ..settings import RECORD_KEYS
+    with open(os.path.join(run, "config.json")) as f:
+        recorded = {k: v for k, v in json.load(f).items() if k not in RECORD_KEYS}
+    return recorded == cfg.for_backend(backend()).to_dict()
+
+
 def evaluate(ds, integrator, dilation_fraction, hull_min_views=0.9):
     """Per-method rows (the volume's background, then each 2D baseline) and the volume's held-out renders."""
     from ..compositing import composite_channels
+    from ..fit.report import background_haze, mean_defined
     from ..inpaint2d import available_baselines, inpainter
     from ..metrics import dilate, iou, object_residue, psnr
     from ..render.views import layer_channels, render_camera
@@ -86,6 +99,15 @@ def evaluate(ds, integrator, dilation_fraction, hull_min_views=0.9):
     rows["volume"]["consistency_shares"] = consistency_shares(ds, tests, depth, dil)
     # where the background stands behind the object (a fill in the hull, the surfaces around, or a hole)
     rows["volume"]["mask_surfaces"] = mask_surfaces(ds, integrator, tests, dil, hull_min_views)
+    # the background's haze in the hole and around it (mi_voldis.fit.report.background_haze)
+    haze = [background_haze(integrator, ds.cameras[v], dilate(ds.masks[v], dil)) for v in tests]
+    for key in ("bg_haze_mask", "bg_haze_outside"):
+        rows["volume"][key] = mean_defined([h[key] for h in haze]) if haze else None
+    if not scored and tests:  # a capture: the object's residue against the 2D fill of each view (no truth)
+        fill = inpainter("telea")
+        rows["volume"]["residue_vs_telea"] = float(np.mean([object_residue(
+            images["volume"][v], ds.images[v], fill(ds.images[v], dilate(ds.masks[v], dil)), ds.masks[v])
+            for v in tests]))
     rows["volume"]["seen_share"] = float(np.mean([seen[v].sum() / max(dilate(ds.masks[v], dil).sum(), 1)
                                                   for v in scored])) if scored else None
     # the foreground against the exact coverage, or on a capture against its masks: the coverage
@@ -137,14 +159,21 @@ def main(argv=None):
     state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), adam)
     if state is None:
         raise SystemExit(f"error: {run}: no checkpoints/last.npz (fit it with --keep-checkpoints)")
-    state.fields.pop("bg", None)
-    state.hull_points = state.prior = state.prior_keys = state.occupancy = None
-    state.adam.reset()
+    # the run's own background where it was fitted with these very settings (a refit is the same
+    # computation: the same full field, settings and seed); else the background is fitted again
+    reuse = state.phase == "done" and len(argv) == 3 and same_settings(run, cfg)
+    if not reuse:
+        state.fields.pop("bg", None)
+        state.hull_points = state.prior = state.prior_keys = state.occupancy = None
+        state.adam.reset()
     checkpoint = os.path.join(out, "state.npz")
-    state.save(checkpoint, "bg", 0)
+    state.save(checkpoint, "done" if reuse else "bg", 0)
     t0 = time.perf_counter()
     inputs, state = fit(fit_ds, checkpoint, cfg, resume=True, progress=False)
     seconds = time.perf_counter() - t0
+    if reuse:
+        with open(os.path.join(run, "metrics.json")) as f:
+            seconds = json.load(f)["seconds"]["phase_bg"]
     os.remove(checkpoint)
     integrator = fit_integrator(inputs, state)
     rows, renders = evaluate(ds, integrator, cfg.hull_dilation, cfg.hull_min_views)

@@ -14,7 +14,7 @@ from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, ne
 from ..metrics import dilate
 from ..render import march
 from .hull import hull_behind_occluders, visual_hull
-from .visibility import in_view
+from .visibility import before_hidden_surface, in_view
 
 
 def hull_region(inputs, field, neighbours, depth=None):
@@ -118,7 +118,8 @@ def background_regions(inputs, state, neighbours=None):
     in front of it on a masked ray (:func:`masked_ray_cells`). The walls and floor around the object
     that some view sees are no part of it, however opaque, so a low ``object_alpha`` can take in the
     object's soft edge without carving the surfaces beside it; nor is the density hidden behind it,
-    where the refit continues the background."""
+    where the refit continues the background. With ``hole_carve`` the object's voxels also take in the
+    unseen hull vertices in front of the surface the object hides (:func:`hidden_front`), however faint."""
     from .lift import training_depths
     cfg, full = inputs.cfg, state.fields["full"]
     neighbours = neighbours or neighbour_vertices(full)
@@ -130,10 +131,31 @@ def background_regions(inputs, state, neighbours=None):
     if cfg.object_front:
         candidates |= front
     unseen = never_seen(inputs, full, hull > 0, depth)
+    if cfg.hole_carve:  # unseen space before the hidden surface: the object's or empty, never background
+        candidates |= unseen & hidden_front(inputs, full, unseen, depth)
     obj, refill = unseen & candidates, unseen
     if cfg.keep_seen:  # the object's soft edge is refilled too
         refill = unseen | (dilate_vertices(obj, neighbours, cfg.keep_seen_gap) & (hull > 0))
     return hull, points, obj, refill
+
+
+def hidden_front(inputs, field, candidates, depth):
+    """Bool per stored vertex of ``field``: among ``candidates`` (Bool per stored vertex), those the
+    masked training views of ``depth`` (view -> full-field median depth map) vote in front of the surface
+    the object hides (:func:`~mi_voldis.fit.visibility.before_hidden_surface`; masks grown by 1% of the
+    diagonal as the colour prior's, margin ``hole_carve_margin``). The harmonic fill spreads the
+    density around the hull through all of it, a veil the colour prior then paints: on a forward-facing
+    rig, whose hull reaches far behind the object, a column of haze where the object stood."""
+    ds, cfg = inputs.ds, inputs.cfg
+    pts_scene, real = vertex_positions(field)
+    pick = np.flatnonzero(np.array(candidates) & real)
+    views = [v for v in depth if v in set(int(u) for u in ds.masked_train)]
+    grow = int(np.ceil(0.01 * np.hypot(*ds.size)))
+    front = before_hidden_surface(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
+                                  [depth[v] for v in views], [ds.masks[v] for v in views], grow, cfg.hole_carve_margin)
+    out = np.zeros(len(pts_scene), bool)
+    out[pick[front]] = True
+    return mi.Bool(out)
 
 
 def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chunk=1 << 16):

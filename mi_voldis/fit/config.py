@@ -193,6 +193,13 @@ class FitConfig(Settings):
                                        "sees unmasked are the object too, however faint: the prior cannot paint "
                                        "the background over the object, so the foreground layer covers it whole "
                                        "(bg_strategy 'harmonic', 'guided')")
+    hole_carve: bool = setting(True, "unseen hull voxels that the masked training views vote in front of the surface "
+                                     "the object hides (each view's full-field depth around its mask filled into it "
+                                     "as disparity) are the object's or empty: emptied in bg and kept so, as the "
+                                     "object's voxels are (bg_strategy 'harmonic', 'guided'): no veil of haze in "
+                                     "front of the hidden surface")
+    hole_carve_margin: float = setting(0.05, "with hole_carve, a voxel is in front when nearer than (1 - this) times "
+                                             "the filled depth", low=0, high=1)
     keep_seen: bool = setting(True, "hull voxels some training view sees unmasked keep the full field's density "
                                     "in bg (their colour is refitted; only the unseen voxels and those within "
                                     "keep_seen_gap of the object's are filled and reshaped; bg_strategy "

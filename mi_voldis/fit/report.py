@@ -16,7 +16,8 @@ def evaluate(ds, integrator, hull_dilation):
     """Metrics on every held-out view, and the rendered layers of each (for previews). Background
     metrics inside the masks use masks dilated by ``hull_dilation`` of the image diagonal; ``haze`` is
     the mean share of a ray's weight the full field spends well in front of the surface it shows
-    (:func:`~mi_voldis.render.surface.front_weight`)."""
+    (:func:`~mi_voldis.render.surface.front_weight`), ``bg_haze_mask`` / ``bg_haze_outside`` the
+    background's inside the dilated masks and outside them (:func:`background_haze`)."""
     rows, renders = [], {}
     dil = int(np.ceil(hull_dilation * np.hypot(*ds.size)))
     for v in ds.test:
@@ -26,6 +27,8 @@ def evaluate(ds, integrator, hull_dilation):
         row = {"view": int(v), "psnr": psnr(full, ds.images[v]), "ssim": ssim(full, ds.images[v])}
         front, hit = front_weight(integrator, ds.cameras[v])  # the full field's haze (render.surface)
         row["haze"] = float(front[hit].mean()) if hit.any() else float("nan")
+        if ds.masks is not None:  # the background's, inside the masks and outside them
+            row.update(background_haze(integrator, ds.cameras[v], dilate(ds.masks[v], dil)))
         if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all():
             bg, gt = np.clip(out["bg"][0], 0, 1), ds.backgrounds[v]
             region = dilate(ds.masks[v], dil) if ds.masks is not None else None
@@ -38,6 +41,19 @@ def evaluate(ds, integrator, hull_dilation):
         rows.append(row)
     summary = {key: mean_defined([r[key] for r in rows]) for key in rows[0] if key != "view"} if rows else {}
     return summary, rows, renders
+
+
+def background_haze(integrator, camera, region):
+    """The background field's haze (:func:`~mi_voldis.render.surface.front_weight`) through ``camera``,
+    averaged over the rays that end on something inside ``region`` (H, W bool: the dilated mask, where
+    the object was) and outside it: {'bg_haze_mask', 'bg_haze_outside'} (NaN where no such ray). In
+    the hole the background should stand on surfaces as it does around it, so the first is no higher
+    than the second; above it, a veil hangs where the object stood."""
+    front, hit = front_weight(integrator, camera, layer="bg")
+    out = {}
+    for key, part in (("bg_haze_mask", region & hit), ("bg_haze_outside", ~region & hit)):
+        out[key] = float(front[part].mean()) if part.any() else float("nan")
+    return out
 
 
 def mean_defined(values):

@@ -9,6 +9,8 @@ needs a prior (:mod:`mi_voldis.fit.lift`).
 import numpy as np
 
 from ..cameras import pixel_of, pixel_rays
+from ..inpaint2d import fill_disparity
+from ..metrics import dilate
 
 
 def in_view(points, cameras, depths, masks, tol=0.05):
@@ -56,3 +58,30 @@ def pixel_points(camera, depth, pixels):
     py, px = np.divmod(np.asarray(pixels), camera.width)
     o, d = pixel_rays(camera, px + 0.5, py + 0.5)
     return o + depth.reshape(-1)[pixels, None] * d
+
+
+def before_hidden_surface(points, cameras, depths, masks, grow=0, margin=0.05):
+    """Bool per world point (n, 3): in front of the surface the object hides, by the vote of the views.
+
+    In each view j whose mask ``masks[j]`` (grown by ``grow`` pixels: edge pixels mix the object in)
+    the point projects into, the surface behind the object is taken to continue the surfaces around the
+    mask: the full-field depth map ``depths[j]`` (distance along the rays, NaN where a ray ends on
+    nothing) filled in the mask as disparity (:func:`~mi_voldis.inpaint2d.fill_disparity`: planes
+    exactly). The point is in front there when its distance is below (1 - ``margin``) times the filled
+    one; it is in front when it is so in more than half of the views that have it in their masks. On a
+    masked ray nothing but the object stands before that surface, so such space is the object's or
+    empty: a background drawn there is a veil in front of the hidden surface (haze in the hole)."""
+    points = np.asarray(points, np.float64)
+    front, votes = np.zeros(len(points)), np.zeros(len(points))
+    for cam, depth, mask in zip(cameras, depths, masks):
+        hole = dilate(mask, grow) if grow else np.asarray(mask, bool)
+        known = np.isfinite(depth) & ~hole
+        if not known.any() or not hole.any():
+            continue
+        filled = fill_disparity(np.where(known, depth, np.nan), hole, known, camera=cam)
+        ix, iy, ok = pixel_of(cam, points)
+        ok[ok] &= hole[iy[ok], ix[ok]]
+        dist = np.linalg.norm(points[ok] - cam.to_world[:3, 3], axis=1)
+        votes[ok] += 1.0
+        front[ok] += dist < (1.0 - margin) * filled[iy[ok], ix[ok]]
+    return (votes > 0) & (front > 0.5 * votes)

@@ -54,15 +54,15 @@ def median_depth(integrator, camera, chunk=CHUNK, layer="full"):
     return depth.reshape(camera.height, camera.width), hit.reshape(camera.height, camera.width)
 
 
-def front_weight(integrator, camera, margin=0.1, chunk=CHUNK):
-    """Per pixel of ``camera`` (H, W): the full field's weight on its ray more than ``margin`` times
-    the median depth in front of its median point, sum_i w_i [t_i < (1 - margin) t_med] (module
-    docstring), and whether the ray has a median point (H, W) bool (the weight is 0 where not)."""
+def front_weight(integrator, camera, margin=0.1, chunk=CHUNK, layer="full"):
+    """Per pixel of ``camera`` (H, W): ``layer``'s field's ('full' or 'bg') weight on its ray more than
+    ``margin`` times the median depth in front of its median point, sum_i w_i [t_i < (1 - margin) t_med]
+    (module docstring), and whether the ray has a median point (H, W) bool (the weight is 0 where not)."""
     o, d = _camera_rays(camera)
-    points, hit = median_points(integrator, o, d, chunk)
+    points, hit = median_points(integrator, o, d, chunk, layer)
     reach = np.where(hit, (1.0 - margin) * np.linalg.norm(points - o, axis=1), 0.0)
-    plan = integrator.plan(("full",))
-    chain = plan.sources.full
+    plan = integrator.plan((layer,))
+    chain = getattr(plan.sources, layer)
     out = np.zeros(len(o))
     with dr.suspend_grad():
         for s in range(0, len(o), chunk):

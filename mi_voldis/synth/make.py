@@ -50,7 +50,18 @@ def make_cameras(rig, views, width, height):
         return rigs.orbit(views, cam["target"], cam["radius"], cam["elevation_deg"], cam["fov_deg"], width, height)
     if cam["type"] == "forward":
         return rigs.forward_grid(views, cam["centre"], cam["target"], cam["spread"], cam["fov_deg"], width, height)
-    raise ValueError(f"unknown camera rig type '{cam['type']}' (orbit or forward)")
+    if cam["type"] == "path":
+        if views != len(cam["positions"]):
+            raise ValueError(f"the rig is a path of {len(cam['positions'])} cameras: --views cannot make it {views}")
+        return rigs.path(cam["positions"], cam["targets"], cam["fov_deg"], width, height)
+    raise ValueError(f"unknown camera rig type '{cam['type']}' (orbit, forward or path)")
+
+
+def forward_facing(rig):
+    """Whether the rig faces one way (LLFF's poses_bounds.npy and NDC apply): a forward grid, or a path
+    that says so."""
+    cam = rig["cameras"]
+    return cam["type"] == "forward" or (cam["type"] == "path" and bool(cam.get("forward", False)))
 
 
 def _sensor(width, height, spp):
@@ -149,7 +160,7 @@ def make_dataset(scene_path, out, views=None, resolution=None, spp=None, seed=0,
         meta = {"camera_angle_x": float(np.radians(cameras[0].fov_x)), "w": width, "h": height,
                 "scene": os.path.basename(scene_path), "seed": seed, "spp": spp,
                 "moved_transform": moved_matrix.tolist(), "frames": frames}
-        if rig["cameras"]["type"] == "forward":
+        if forward_facing(rig):
             bounds = depth_bounds(scenes["image"], cameras, width, height)
             write_llff(tmp, cameras, bounds)
             meta.update(forward_facing=True, near=float(bounds[:, 0].min()), far=float(bounds[:, 1].max()))

@@ -12,6 +12,13 @@ Every draw comes from ``numpy.random.default_rng(seed)``, so a seed names one sc
 - a rig: a 360-degree orbit (half the seeds) or a forward-facing grid, looking at the object, and the
   moved-object edit (a translation on the floor and a turn about the vertical).
 
+With a rig ``kind`` (the removal family, :mod:`mi_voldis.synth.family`) the scene is drawn as above and
+then made harder from a second stream of the seed, so that what the object hides is what users' photos
+hide: the rig is that kind ('orbit', 'forward', 'arc': a hand-held partial orbit, or 'handheld': a
+hand-held forward-facing rig; both hand-held paths unevenly spaced, crowded towards one end, the aim
+wandering), the floor glossy or patterned, a wall close behind the object (half the forward rigs and
+the narrow arcs) and an area light casting soft shadows instead of the point light (half the scenes).
+
 :func:`write_random_scene` writes ``scene.xml``, ``scene.json`` (the rig, as the bundled scenes have)
 and ``textures/`` into a folder; :func:`mi_voldis.synth.make.make_dataset` renders it with ground truth.
 """
@@ -24,6 +31,7 @@ from ..io.images import write_png
 from . import rigs
 
 TEXTURE = 128  # texture size in pixels
+KINDS = ("orbit", "forward", "arc", "handheld")  # the rigs a scene may be asked for
 
 
 def texture(rng):
@@ -61,11 +69,14 @@ class _Scene:
         rng = self.rng
         kind = kind or rng.choice(["diffuse", "diffuse", "textured", "glossy"])
         colour = rng.uniform(0.05, 0.95, 3)
-        if kind == "textured":
+        if kind in ("textured", "glossy textured"):
             name = f"textures/t{len(self.textures):02d}.png"
             self.textures[name] = texture(rng)
-            return (f'<bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" '
-                    f'value="{name}"/></texture></bsdf>')
+            bitmap = f'<string name="filename" value="{name}"/></texture>'
+            if kind == "glossy textured":  # a varnished pattern: highlights over the texture
+                return (f'<bsdf type="roughplastic"><texture type="bitmap" name="diffuse_reflectance">{bitmap}'
+                        f'<float name="alpha" value="{rng.uniform(0.05, 0.2):.3g}"/></bsdf>')
+            return f'<bsdf type="diffuse"><texture type="bitmap" name="reflectance">{bitmap}</bsdf>'
         if kind == "glossy":
             return (f'<bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="{_vec(colour)}"/>'
                     f'<float name="alpha" value="{rng.uniform(0.05, 0.3):.3g}"/></bsdf>')
@@ -107,10 +118,12 @@ def _object(scene):
     return np.array([x / 2, 0.0, 0.0]), max(y, 2 * size[1]), radius + 0.05
 
 
-def _rig(rng, target, height):
-    """Camera rig around ``target``: an orbit or a forward-facing grid (rigs.py), as the JSON rig has it."""
+def _rig(rng, target, height, kind=None):
+    """Camera rig around ``target``: an orbit or a forward-facing grid (rigs.py), as the JSON rig has it;
+    ``kind`` (:data:`KINDS`) picks which (a hand-held kind: the rig it is drawn from, :func:`_handheld`)."""
     look = [float(target[0]), float(0.5 * height), float(target[2])]
-    if rng.uniform() < 0.5:
+    draw = rng.uniform()
+    if (draw < 0.5) if kind is None else kind in ("orbit", "arc"):
         low = rng.uniform(35, 45)
         return {"type": "orbit", "target": look, "radius": float(rng.uniform(2.0, 3.0)),
                 "elevation_deg": [float(low), float(low + rng.uniform(10, 25))], "fov_deg": float(rng.uniform(38, 48))}
@@ -121,6 +134,50 @@ def _rig(rng, target, height):
     return {"type": "forward", "centre": [float(c) for c in centre], "target": look,
             "spread": [float(rng.uniform(0.6, 1.0)), float(rng.uniform(0.3, 0.6))],
             "fov_deg": float(rng.uniform(45, 60))}
+
+
+class _Handheld:
+    """A hand-held path drawn once from ``hard`` (the seed's second stream) and laid out from a rig of
+    ``_rig``: for an orbit, an arc of ``span`` degrees about ``facing`` (views crowded towards one end,
+    elevations spread over the orbit's range, distances within 10%); for a forward grid, positions across
+    its spread crowded to one side, off the plane by up to 0.1. Every camera aims at the target moved
+    by a few centimetres. :meth:`rig` lays it out for an elevation range (the floor check raises it)."""
+
+    def __init__(self, hard, cam, views, span=None):
+        self.cam, self.span, self.views = cam, span, views
+        crowd = hard.uniform(1.0, 2.5)  # u^crowd for u uniform: dense near 0, sparse near 1
+        self.along = np.sort(hard.uniform(0, 1, views)) ** crowd
+        self.across = hard.uniform(0, 1, views)
+        self.off = hard.uniform(-1, 1, views)
+        self.facing = float(hard.uniform(0, 360))
+        self.aim = hard.uniform(-1, 1, (views, 3)) * (0.04 if cam["type"] == "orbit" else 0.08)
+
+    def rig(self, elevation_deg=None):
+        cam, target = self.cam, np.asarray(self.cam["target"], np.float64)
+        if cam["type"] == "orbit":
+            lo, hi = elevation_deg or cam["elevation_deg"]
+            az = np.radians(self.facing + self.span * (self.along - 0.5))
+            el = np.radians(lo + (hi - lo) * self.across)
+            r = cam["radius"] * (1.0 + 0.1 * self.off)
+            pos = target + r[:, None] * np.stack([np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)], 1)
+            forward = False
+        else:
+            frame = rigs.look_at(cam["centre"], target)
+            x = (self.along - 0.5) * cam["spread"][0]
+            y = (self.across - 0.5) * cam["spread"][1]
+            pos = np.asarray(cam["centre"]) + x[:, None] * frame[:3, 0] + y[:, None] * frame[:3, 1] \
+                + 0.1 * self.off[:, None] * frame[:3, 2]
+            forward = True
+        return {"type": "path", "forward": forward, "positions": pos.round(6).tolist(),
+                "targets": (target + self.aim).round(6).tolist(), "fov_deg": cam["fov_deg"]}
+
+
+def _cameras(cam, views, width, height):
+    if cam["type"] == "orbit":
+        return rigs.orbit(views, cam["target"], cam["radius"], cam["elevation_deg"], cam["fov_deg"], width, height)
+    if cam["type"] == "forward":
+        return rigs.forward_grid(views, cam["centre"], cam["target"], cam["spread"], cam["fov_deg"], width, height)
+    return rigs.path(cam["positions"], cam["targets"], cam["fov_deg"], width, height)
 
 
 def _ray_ends(cameras, plane_point, plane_normal):
@@ -138,26 +195,37 @@ def _ray_ends(cameras, plane_point, plane_normal):
     return np.array(out)
 
 
-def random_scene(seed, views=None):
-    """(scene XML text, rig dict, {texture path: uint8 image}) of the random scene ``seed``."""
+def random_scene(seed, views=None, kind=None):
+    """(scene XML text, rig dict, {texture path: uint8 image}) of the random scene ``seed``; with ``kind``
+    (:data:`KINDS`) the harder scene of the module docstring with that rig."""
+    if kind is not None and kind not in KINDS:
+        raise ValueError(f"unknown random scene rig kind '{kind}' (expected one of {', '.join(KINDS)})")
     rng = np.random.default_rng([seed, 7919])
+    hard = np.random.default_rng([seed, 7919, 1]) if kind else None
     scene = _Scene(rng)
     base, height, radius = _object(scene)
-    cam = _rig(rng, base, height)
-    views = views or (40 if cam["type"] == "orbit" else 24)
+    cam = _rig(rng, base, height, kind)
+    orbit = cam["type"] == "orbit"
+    views = views or (40 if orbit else 24)
+    # a wall close behind the object: half the forward rigs, and the arcs narrow enough to stay before it
+    close = hard is not None and kind != "orbit" and hard.uniform() < 0.5
+    path = _Handheld(hard, cam, views, (hard.uniform(100, 160) if close else hard.uniform(160, 300))
+                     if kind == "arc" else None) if kind in ("arc", "handheld") else None
     # the floor (and for forward rigs the back wall) catches every camera ray. A frustum meets a plane in
     # the quadrilateral of its corner rays (when all of them reach it), so corners bound what must be covered.
     while True:
-        probe = rigs.orbit(views, cam["target"], cam["radius"], cam["elevation_deg"], cam["fov_deg"], 16, 12) \
-            if cam["type"] == "orbit" else \
-            rigs.forward_grid(views, cam["centre"], cam["target"], cam["spread"], cam["fov_deg"], 16, 12)
+        rig_cam = path.rig(cam.get("elevation_deg")) if path else cam
+        probe = _cameras(rig_cam, views, 16, 12)
         ends = _ray_ends(probe, np.zeros(3), np.array([0.0, 1.0, 0.0]))
-        if cam["type"] == "forward" or np.isfinite(ends).all():
+        if not orbit or np.isfinite(ends).all():
             break
         cam["elevation_deg"] = [e + 5.0 for e in cam["elevation_deg"]]  # a corner saw the sky: look down more
     centres = np.array([c.to_world[:3, 3] for c in probe])
-    if cam["type"] == "forward":
+    floor_kind = "textured" if hard is None else hard.choice(["textured", "glossy textured", "glossy"])
+    if not orbit:
         wall_z = -rng.uniform(0.8, 1.4)
+        if close:
+            wall_z = -(radius + hard.uniform(0.05, 0.3))
         wall = _ray_ends(probe, np.array([0.0, 0.0, wall_z]), np.array([0.0, 0.0, 1.0]))
         half_w = float(np.max(np.abs(wall[:, 0]))) + 0.3
         top = float(np.max(wall[:, 1])) + 0.3
@@ -168,7 +236,16 @@ def random_scene(seed, views=None):
     else:
         floor_half = float(np.abs(ends[:, [0, 2]]).max()) + 0.3
     scene.rectangle("floor", f'<rotate x="1" angle="-90"/><scale value="{floor_half:.4g}"/>',
-                    scene.material("textured"))
+                    scene.material(floor_kind))
+    top = float(height + 0.8)  # an orbit's box: the floor and what stands on it
+    if close and orbit:  # behind the object, facing the arc's middle, within the box
+        facing = np.radians(path.facing)
+        normal = np.array([np.sin(facing), 0.0, np.cos(facing)])
+        spot = base - (radius + hard.uniform(0.05, 0.3)) * normal
+        half_w = min(1.5, 0.9 * floor_half)
+        scene.rectangle("wall", f'<scale x="{half_w:.4g}" y="{top / 2 - 0.03:.4g}"/><rotate y="1" '
+                                f'angle="{path.facing:.4g}"/><translate x="{spot[0]:.4g}" y="{top / 2:.4g}" '
+                                f'z="{spot[2]:.4g}"/>', scene.material("textured"))
     # other things on the floor, clear of the object
     mirror = rng.uniform() < 0.3
     for k in range(int(rng.integers(2, 6))):
@@ -185,27 +262,37 @@ def random_scene(seed, views=None):
         tall = height + rng.uniform(0.2, 0.6)
         scene.add("occluder", "box", [spot[0], tall / 2, spot[2]], [0.03, tall / 2, 0.03], scene.material("diffuse"))
     light = [float(rng.uniform(-2, 2)), float(rng.uniform(2.0, 3.5)), float(rng.uniform(-2, 2))]
+    intensity = rng.uniform(10, 20)
+    if hard is not None and hard.uniform() < 0.5:
+        # an area light of side a facing the object: radiance L = I / a^2 keeps the point light's intensity
+        # I on its axis, and its shadows soften with a
+        side = hard.uniform(0.4, 1.2)
+        emitter = (f'<shape type="rectangle" id="light"><transform name="to_world"><scale value="{side / 2:.4g}"/>'
+                   f'<lookat origin="{_vec(light)}" target="{_vec(base)}" up="0, 0, 1"/></transform>'
+                   f'<emitter type="area"><rgb name="radiance" value="{intensity / side ** 2:.4g}"/></emitter></shape>')
+    else:
+        emitter = (f'<emitter type="point"><point name="position" x="{light[0]:.4g}" y="{light[1]:.4g}" '
+                   f'z="{light[2]:.4g}"/><rgb name="intensity" value="{intensity:.3g}"/></emitter>')
     xml = "\n    ".join(['<scene version="3.0.0">', '<integrator type="path"><integer name="max_depth" value="6"/>'
                          '</integrator>'] + scene.shapes +
-                        [f'<emitter type="point"><point name="position" x="{light[0]:.4g}" y="{light[1]:.4g}" '
-                         f'z="{light[2]:.4g}"/><rgb name="intensity" value="{rng.uniform(10, 20):.3g}"/></emitter>',
-                         f'<emitter type="constant"><rgb name="radiance" value="{rng.uniform(0.15, 0.35):.3g}"/>'
-                         '</emitter>']) + "\n</scene>\n"
+                        [emitter, '<emitter type="constant"><rgb name="radiance" '
+                         f'value="{rng.uniform(0.15, 0.35):.3g}"/></emitter>']) + "\n</scene>\n"
     angle = float(rng.uniform(0, 2 * np.pi))
     shift = rng.uniform(0.2, 0.35)
-    rig = {"description": f"random scene, seed {seed} (mi_voldis.synth.random_scene)", "object_prefix": "object",
-           "cameras": cam, "views": views, "resolution": [160, 120], "spp": 128,
+    what = f"random scene, seed {seed}" + (f", {kind} rig" if kind else "")
+    rig = {"description": f"{what} (mi_voldis.synth.random_scene)", "object_prefix": "object",
+           "cameras": rig_cam, "views": views, "resolution": [160, 120], "spp": 128,
            "moved": {"translate": [float(shift * np.cos(angle)), 0.0, float(shift * np.sin(angle))],
                      "rotate": ["y", float(rng.uniform(20, 60))], "scale": 1.0}}
-    if cam["type"] == "orbit":
-        rig["aabb"] = [[-floor_half, -0.05, -floor_half], [floor_half, float(height + 0.8), floor_half]]
+    if orbit:
+        rig["aabb"] = [[-floor_half, -0.05, -floor_half], [floor_half, top, floor_half]]
     return xml, rig, scene.textures
 
 
-def write_random_scene(seed, folder, views=None):
-    """Write the random scene ``seed`` into ``folder`` (scene.xml, scene.json, textures/); returns the
-    scene file's path."""
-    xml, rig, textures = random_scene(seed, views)
+def write_random_scene(seed, folder, views=None, kind=None):
+    """Write the random scene ``seed`` (``kind``: :func:`random_scene`) into ``folder`` (scene.xml,
+    scene.json, textures/); returns the scene file's path."""
+    xml, rig, textures = random_scene(seed, views, kind)
     os.makedirs(os.path.join(folder, "textures"), exist_ok=True)
     for name, image in textures.items():
         write_png(os.path.join(folder, name), image)

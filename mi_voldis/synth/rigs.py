@@ -1,4 +1,5 @@
-"""Camera rigs for synthetic datasets: an orbit (360 degrees) and a forward-facing grid (LLFF-like)."""
+"""Camera rigs for synthetic datasets: an orbit (360 degrees), a forward-facing grid (LLFF-like) and a
+hand-held path (explicit positions, each camera looking at its own target)."""
 import numpy as np
 
 from ..cameras import Camera, look_at  # noqa: F401  (look_at: the rigs' camera frame)
@@ -35,3 +36,9 @@ def forward_grid(views, centre, target, spread, fov_deg, width, height):
         m[:3, 3] = centre + x * base[:3, 0] + y * base[:3, 1]
         cams.append(Camera(m, fov_deg, width, height))
     return cams
+
+
+def path(positions, targets, fov_deg, width, height):
+    """One camera per position, each looking at its target: a hand-held rig (arcs, uneven spacing, a
+    wandering aim), written out as points because no formula draws it."""
+    return [Camera(look_at(p, t), fov_deg, width, height) for p, t in zip(positions, targets)]
