@@ -5,6 +5,8 @@
     python scripts/bench.py --masks [--work out/bench] [--report reports] [--scenes ...]
     python scripts/bench.py --effects [--work out/bench] [--report reports] [--scenes ...]
     python scripts/bench.py --family [--work out/bench] [--report reports] [--scenes family00,...]
+    python scripts/bench.py --spinnerf [--work out/bench] [--report reports] [--scenes family10,...]
+                            [--lpips-weights DIR]
     python scripts/bench.py --step-profile [--rays random|tiles]   (a training step by kernel, record on and off)
 
 Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
@@ -14,7 +16,11 @@ reports/removal.md instead: every background strategy on the bundled and random 
 --masks writes reports/masks.md: masks from two views (scripts/make_masks.py) and removal with them;
 --effects writes reports/effects.md: removal with the object's shadow given as effect masks;
 --family fits the removal family (20 random scenes, mi_voldis/synth/family.py: ten tune, ten check) and
-rewrites reports/removal.md to lead with the check half's worst scene (reports/family.json).
+rewrites reports/removal.md to lead with the check half's worst scene (reports/family.json);
+--spinnerf writes reports/spinnerf.md: family scenes (default the check half) rendered in SPIn-NeRF's layout
+(make_dataset.py --layout spinnerf), fitted with the default command and scored with SPIn-NeRF's protocol
+(whole / in-mask / bounding-box PSNR, SSIM, and LPIPS with --lpips-weights), beside Telea and Navier-Stokes
+on the full field's test renders and the peers' published numbers (mi_voldis/bench/spinnerf.py).
 """
 import argparse
 import os
@@ -42,9 +48,15 @@ def main(argv=None):
                     help="only the effects section: removal with the object's shadow given as effect masks")
     ap.add_argument("--family", action="store_true",
                     help="only the removal family: the default judged on ten scenes it was not tuned on")
+    ap.add_argument("--spinnerf", action="store_true",
+                    help="only SPIn-NeRF's protocol on family scenes in its layout (default: the check half)")
+    ap.add_argument("--lpips-weights", metavar="DIR",
+                    help="--spinnerf: folder with LPIPS weights (see mi_voldis/lpips.py; nothing is downloaded)")
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--quiet", action="store_true", help="print nothing but errors (the children run quietly anyway)")
     args = ap.parse_args(argv)
+    if args.lpips_weights and not args.spinnerf:
+        ap.error("--lpips-weights is for --spinnerf")
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
     if args.step_profile:
         import json
@@ -57,8 +69,9 @@ def main(argv=None):
     from mi_voldis.bench import report
     from mi_voldis.bench.family import run_family, write_family
     from mi_voldis.bench.run import run_all, run_effects, run_masks, run_removal, section_scenes
+    from mi_voldis.bench.spinnerf import section as spinnerf_section
     scenes = args.scenes.split(",") if args.scenes else None
-    section = next((flag for flag in ("removal", "masks", "effects", "family") if getattr(args, flag)),
+    section = next((flag for flag in ("removal", "masks", "effects", "family", "spinnerf") if getattr(args, flag)),
                    "quick" if args.quick else "all")
     try:  # before anything runs: a bad --scenes never overwrites the last report
         section_scenes(section, scenes)
@@ -67,7 +80,8 @@ def main(argv=None):
     for flag, (measure, write) in {"removal": (run_removal, report.write_removal),
                                    "masks": (run_masks, report.write_masks),
                                    "effects": (run_effects, report.write_effects),
-                                   "family": (run_family, write_family)}.items():
+                                   "family": (run_family, write_family),
+                                   "spinnerf": spinnerf_section(args.lpips_weights)}.items():
         if getattr(args, flag):  # one section alone, with its own report
             results = measure(os.path.abspath(args.work), args.report, scenes)
             path = write(results, args.report, f"python scripts/bench.py --{flag}" +

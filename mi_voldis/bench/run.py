@@ -42,16 +42,20 @@ def present(captures, scenes=None, announce=True):
 
 
 def section_scenes(section, scenes=None):
-    """The scenes a section ("all", "quick", "removal", "masks", "effects") would run, of ``scenes`` if given (the real
-    captures only where present). Raises ValueError naming an unknown scene, or when nothing is left to
-    run (then no report is written over the last one)."""
+    """The scenes a section ("all", "quick", "removal", "masks", "effects", "family", "spinnerf") would run, of
+    ``scenes`` if given (the real captures only where present; "spinnerf" offers the family and runs its check
+    half by default). Raises ValueError naming an unknown scene, or when nothing is left to run (then no report
+    is written over the last one)."""
     captures = {"all": CAPTURES, "quick": [], "removal": REMOVAL_CAPTURES, "masks": [], "effects": [],
-                "family": []}[section]
+                "family": [], "spinnerf": []}[section]
     family_scenes = [family.name(k) for k in range(family.SIZE)]
-    offered = {"all": SCENES, "quick": SCENES[:1], "family": family_scenes}.get(section, TRUTH_SCENES) + captures
+    offered = {"all": SCENES, "quick": SCENES[:1], "family": family_scenes,
+               "spinnerf": family_scenes}.get(section, TRUTH_SCENES) + captures
     unknown = [s for s in scenes or [] if s not in offered]
     if unknown:
         raise ValueError(f"--scenes: {', '.join(unknown)} not among this section's scenes ({', '.join(offered)})")
+    if section == "spinnerf" and not scenes:  # judged where nothing was tuned: the family's check half
+        scenes = [family.name(k) for k in family.CHECK]
     run = [s for s in offered if s not in captures and (not scenes or s in scenes)] + present(captures, scenes)
     if not run:
         raise ValueError(f"--scenes: nothing to run (the captures are read from {SHARED}; set MI_VOLDIS_CAPTURES)")
@@ -182,16 +186,21 @@ def time_to_within(curve, best, tolerance=0.5):
     return next((t for t, p in curve if p >= best - tolerance), None)
 
 
-def make_data(scene, out, log_dir, quick):
-    """A bundled scene's dataset, or (``scene`` 'random<SEED>') a random scene's, rendered once."""
-    if not os.path.isfile(os.path.join(out, "transforms.json")):
+def make_data(scene, out, log_dir, quick, layout="transforms"):
+    """A bundled scene's dataset, or (``scene`` 'random<SEED>') a random scene's, rendered once; ``layout``
+    'spinnerf': in SPIn-NeRF's LLFF layout (``make_dataset.py --layout spinnerf``)."""
+    # a file every dataset of that layout has (make_dataset swaps the folder into place only when complete)
+    done = "poses_bounds.npy" if layout == "spinnerf" else "transforms.json"
+    if not os.path.isfile(os.path.join(out, done)):
         k = family.index(scene)
         source = ["--family", str(k)] if k is not None else \
             ["--random", scene[len("random"):]] if scene.startswith("random") else [bundled_scene(scene)]
         args = ["scripts/make_dataset.py"] + source + ["--out", out]
+        if layout != "transforms":
+            args += ["--layout", layout]
         if quick:
             args += ["--views", "24", "--spp", "32"]
-        child(args, os.path.join(log_dir, f"data_{scene}.log"))
+        child(args, os.path.join(log_dir, f"data_{scene}{'' if layout == 'transforms' else '_' + layout}.log"))
     return out
 
 
