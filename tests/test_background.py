@@ -11,7 +11,7 @@ from mi_voldis.device import from_numpy
 from mi_voldis.field_state import new_field, vertex_positions
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.lift import lift_pixels, write_surface
-from mi_voldis.fit.visibility import before_hidden_surface, seen_elsewhere
+from mi_voldis.fit.visibility import hidden_surface_side, seen_elsewhere
 from mi_voldis.inpaint2d import INPAINTERS, fill_disparity, harmonic_fill, has_contrib, inpainter, resolve
 from mi_voldis.metrics import dilate, object_residue
 from mi_voldis.render.views import render_camera
@@ -205,27 +205,35 @@ def test_visibility_of_a_plane_behind_an_occluder_from_two_cameras():
     np.testing.assert_array_equal(seen[clear], expected[clear])
 
 
-def test_space_before_the_hidden_plane_is_voted_in_front_and_the_plane_itself_is_not():
+def test_space_before_the_hidden_plane_and_far_behind_it_is_voted_so_and_the_plane_itself_is_not():
     """A sphere above the plane y = -0.5, seen by two cameras, their depth maps the sphere's inside its
     masks: the plane the sphere hides is the masks' surroundings continued (a plane's disparity is
     affine: exact). Points on the way from a camera to that plane, inside the mask and more than the
-    margin before it, are in front (the sphere's inside among them); the plane's points and those below
-    it are not; points no mask holds get no vote."""
+    margin before it, are in front (the sphere's inside among them); points beyond (1 + behind) times
+    its distance are far behind; the points about the plane are neither, those past it behind; points no
+    mask holds get no vote."""
     centre, radius, cams, depths, masks = sphere_over_plane_from_two_cameras()
     a = cams[0]
     py, px = np.nonzero(masks[0] & ~dilate(~masks[0], 2))
     o, d = pixel_rays(a, px + 0.5, py + 0.5)
     floor = plane_depth(a)[py, px]
-    on_plane = o + floor[:, None] * d
-    args = (cams, [np.where(np.isfinite(x), x, np.nan) for x in depths], masks)
-    assert not before_hidden_surface(on_plane, *args).any()
-    assert not before_hidden_surface(o + 1.02 * floor[:, None] * d, *args).any()  # just behind it
-    before = o + 0.8 * floor[:, None] * d  # a fifth of the way short of it
-    assert before_hidden_surface(before, *args).all()
+    args = (cams, [np.where(np.isfinite(x), x, np.nan) for x in depths], masks, 0, 0.05, 0.25)
+
+    def side(t):
+        return hidden_surface_side(o + t[:, None] * d, *args)
+
+    for scale in (0.98, 1.02, 1.2):  # about the plane, just behind it, within the shell
+        front, far, beyond = side(scale * floor)
+        assert not front.any() and not far.any()
+        assert beyond.all() if scale > 1 else not beyond.any()
+    front, far, beyond = side(0.8 * floor)  # a fifth of the way short of it
+    assert front.all() and not far.any() and not beyond.any()
+    front, far, beyond = side(1.4 * floor)
+    assert far.all() and beyond.all() and not front.any()
     inside = centre + radius * 0.5 * np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])
-    assert before_hidden_surface(inside, *args).all()
+    assert hidden_surface_side(inside, *args)[0].all()
     far = np.array([[3.0, 0.5, -3.0], [-2.0, 0.0, 2.5]])  # in no mask
-    assert not before_hidden_surface(far, *args).any()
+    assert not np.any(hidden_surface_side(far, *args))
 
 
 def test_the_hull_takes_in_what_an_occluder_hides_but_nothing_behind_a_surface():
@@ -622,7 +630,7 @@ def test_the_objects_cells_are_the_dense_hull_cells_masked_rays_show_and_no_view
     more) is not, as the background continues there; the sphere's haze is no part. The full field's
     median depth decides what a view sees: the haze in front of the floor beside the sphere does not
     hide it."""
-    ds, cfg, hull, obj, pts, real = object_cells(tmp_path, object_front=False)
+    ds, cfg, hull, obj, pts, real = object_cells(tmp_path, object_front=False, hole_carve=False)
     assert cfg.object_alpha <= 0.2
     voxel = 2.0 / 39
     centre = np.array([0.0, FLOOR_Y + 0.3, 0.0])
@@ -648,8 +656,8 @@ def test_the_cells_before_the_object_on_masked_rays_join_it_where_no_view_sees_t
     in front of the sphere: each lies within a cell's diagonal of a masked ray's way from the camera to
     the sphere (a corner of a cell it samples) and no view sees it unmasked, and none is inside the
     sphere (the dense rule has those)."""
-    ds, _, hull, obj, pts, real = object_cells(tmp_path, object_front=True)
-    _, _, _, dense, _, _ = object_cells(tmp_path, object_front=False)
+    ds, _, hull, obj, pts, real = object_cells(tmp_path, object_front=True, hole_carve=False)
+    _, _, _, dense, _, _ = object_cells(tmp_path, object_front=False, hole_carve=False)
     voxel = 2.0 / 39
     centre = np.array([0.0, FLOOR_Y + 0.3, 0.0])
     assert (obj >= dense).all()
@@ -672,9 +680,9 @@ def test_the_cells_before_the_object_on_masked_rays_join_it_where_no_view_sees_t
 
 def test_hole_carving_adds_the_unseen_space_before_the_floor_and_nothing_on_or_under_it(tmp_path):
     """With ``hole_carve`` the object's cells are those without it and, in addition, unseen hull cells
-    the masked views vote in front of the floor the sphere hides: the sphere's haze shell among them
-    (above the floor, some view's masked ray passes through it before the floor); no floor cell, no
-    cell below the floor, and none that a view sees unmasked joins."""
+    the masked views vote in front of the floor the sphere hides (the sphere's haze shell among them:
+    above the floor, some view's masked ray passes through it before the floor) or far below it; no
+    floor cell, none within the shell under it, and none that a view sees unmasked joins."""
     ds, _, hull, obj, pts, real = object_cells(tmp_path, hole_carve=True)
     _, _, _, without, _, _ = object_cells(tmp_path, hole_carve=False)
     voxel = 2.0 / 39
@@ -684,8 +692,10 @@ def test_hole_carving_adds_the_unseen_space_before_the_floor_and_nothing_on_or_u
     added = obj & ~without
     assert added.sum() > 20
     assert not (added & ~hull).any()
-    assert not (added & sphere_seen_unmasked(ds, pts, voxel, centre)).any()
-    assert not added[pts[:, 1] < FLOOR_Y + 0.5 * voxel].any()  # the floor and what lies under it stay
+    above = pts[:, 1] > FLOOR_Y  # (the analytic visibility knows the sphere alone: under the floor it says nothing)
+    assert not (added & above & sphere_seen_unmasked(ds, pts, voxel, centre)).any()
+    assert not added[np.abs(pts[:, 1] - FLOOR_Y) < 1.5 * voxel].any()  # the floor and the shell about it stay
+    assert added[pts[:, 1] < FLOOR_Y - 0.3].any()  # far under the floor, where the hull reaches
     shell = real & hull & (r > 0.3 + 0.5 * voxel) & (r < 0.3 + 2.5 * voxel) & (pts[:, 1] > FLOOR_Y + 3 * voxel)
     shell &= ~sphere_seen_unmasked(ds, pts, voxel, centre)
     assert shell.sum() > 20 and obj[shell].mean() > 0.9
@@ -864,3 +874,47 @@ def test_the_removal_score_rates_the_foreground_matte_against_the_masks_on_a_cap
     for key in ("fg_coverage_iou", "fg_matte_iou"):
         assert truth["volume"][key] > 0.8
         assert capture["volume"][key] == pytest.approx(truth["volume"][key], abs=1e-6)
+
+
+def test_the_hole_shows_a_surface_at_the_hidden_floor_even_where_the_fit_kept_no_bricks(tmp_path):
+    """The full field without the floor under the sphere and without the brick there (no training ray
+    ends behind an object, so a fit keeps none): with ``hole_carve`` the background allocates the brick
+    and starts the hidden floor opaque from the floor plane the masks' surroundings continue, so the
+    held-out views see through the hole an opaque surface at the plane's depth (within two voxels);
+    without it the hole stays transparent there."""
+    from mi_voldis.field_state import resample
+    from mi_voldis.fit.fields import fit_integrator
+    from mi_voldis.fit.train import fit
+    from mi_voldis.render.surface import median_depth
+    seen = {}
+    for carve in (True, False):
+        ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene(hidden_floor=True)
+        keep = full.layout.table > 0
+        keep[2, 1, 2] = False  # (bz, by, bx): x, z in [-0.18, 0.18], y in [-0.59, -0.23]: the floor under the sphere
+        full = resample(full, None, keep)
+        cfg = cfg.replace(bg_strategy="guided", steps_bg=0, hole_carve=carve)
+        state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, cfg.adam_beta1, cfg.adam_beta2),
+                         fields={"full": full})
+        state.schedule, state.steps_full = [[0, 40]], 1
+        state.save(str(tmp_path / f"state{carve}.npz"), "bg", 0)
+        inputs, state = fit(ds, str(tmp_path / f"state{carve}.npz"), cfg, resume=True, progress=False)
+        assert (state.fields["bg"].layout.table[2, 1, 2] > 0) == carve
+        integrator = fit_integrator(inputs, state)
+        alphas, errors = [], []
+        for v in ds.test:
+            cam = ds.cameras[v]
+            py, px = np.mgrid[0:cam.height, 0:cam.width]
+            o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
+            t = plane_depth(cam).reshape(-1)
+            hit = o + np.where(np.isfinite(t), t, 0.0)[:, None] * d
+            under = (np.abs(hit[:, 0]) < 0.15) & (np.abs(hit[:, 2]) < 0.15) & ds.masks[v].reshape(-1)
+            alpha = render_camera(integrator, cam, ("bg",))["bg"][1].reshape(-1)
+            depth, ends = median_depth(integrator, cam, layer="bg")
+            alphas.append(alpha[under])
+            errors.append(np.where(ends.reshape(-1), np.abs(depth.reshape(-1) - t), np.inf)[under])
+        seen[carve] = np.concatenate(alphas), np.concatenate(errors)
+    alpha, error = seen[True]
+    assert len(alpha) > 10
+    assert np.median(alpha) > 0.95 and alpha.min() > 0.7 and np.median(error) < 2 * 2.0 / 39, \
+        (np.median(alpha), alpha.min(), np.median(error))
+    assert np.median(seen[False][0]) < 0.5, np.median(seen[False][0])

@@ -85,7 +85,7 @@ def test_hand_held_arcs_cover_part_of_the_circle_unevenly():
 def test_a_path_rig_refuses_another_view_count(tmp_path):
     path = write_random_scene(1002, str(tmp_path), kind="arc")
     rig = make.load_rig(path)
-    with pytest.raises(ValueError, match="path of 40 cameras"):
+    with pytest.raises(ValueError, match="path of 30 cameras"):
         make.make_cameras(rig, 12, 32, 24)
 
 
@@ -109,7 +109,7 @@ def test_make_dataset_family_writes_a_forward_facing_hand_held_dataset(tmp_path)
     assert done.returncode == 0, done.stderr
     assert (out / "poses_bounds.npy").is_file()
     ds = load_dataset(str(out))
-    assert ds.masks is not None and ds.masks.any() and len(ds.cameras) == 24
+    assert ds.masks is not None and ds.masks.any() and len(ds.cameras) == 20
     bad = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "make_dataset.py"), "--family", "20", "--out",
                           str(tmp_path / "x")], capture_output=True, text=True)
     assert bad.returncode != 0 and "--family must be from 0 to 19" in bad.stderr and "Traceback" not in bad.stderr

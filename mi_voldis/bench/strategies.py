@@ -33,7 +33,8 @@ PREVIEWS = 4  # held-out views previewed when the dataset has neither ground tru
 # the background strategies' own settings (bg_strategy first): a refit takes today's defaults for them, so
 # that a run fitted under older defaults is scored with the strategy the default command runs now
 BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
-                       "object_front", "hole_carve", "hole_carve_margin", "keep_seen", "keep_seen_gap",
+                       "object_front", "hole_carve", "hole_carve_margin", "hole_carve_behind",
+                       "keep_seen", "keep_seen_gap",
                        "hull_occluders", "shadow_contrast")
 
 

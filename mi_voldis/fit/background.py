@@ -10,11 +10,13 @@ import numpy as np
 from ..bricks import EMPTY_COLOR, EMPTY_DENSITY
 from ..cameras import pixel_rays
 from ..device import from_numpy
-from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, neighbour_vertices, vertex_positions
+from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, neighbour_vertices, resample
+from ..field_state import vertex_positions
+from ..inpaint2d import fill_disparity
 from ..metrics import dilate
 from ..render import march
 from .hull import hull_behind_occluders, visual_hull
-from .visibility import before_hidden_surface, in_view
+from .visibility import hidden_surface_side, in_view
 
 
 def hull_region(inputs, field, neighbours, depth=None):
@@ -53,12 +55,16 @@ def start_cleared(inputs, state):
     return carved
 
 
-def emptied(inputs, field, region):
+SOLID_ALPHA = 0.5  # opacity per sample step of the hidden surface's vertices as the background starts
+
+
+def emptied(inputs, field, region, alpha=None):
     """``field`` with the vertices of ``region`` (Bool per stored vertex) empty: the initial density of
-    an unfitted field. Their colour stays: colour is interpolated before its activation, so a black
-    vertex beside a surface would darken it; where a whole neighbourhood is empty the colour is cleared
-    at the end of the fit (:func:`clear_empty_background_color`)."""
-    raw = density_raw_for_alpha(inputs.cfg.density_init_alpha, voxel_of(field) * inputs.cfg.step_voxels,
+    an unfitted field (or that of opacity ``alpha`` per sample step). Their colour stays: colour is
+    interpolated before its activation, so a black vertex beside a surface would darken it; where a
+    whole neighbourhood is empty the colour is cleared at the end of the fit
+    (:func:`clear_empty_background_color`)."""
+    raw = density_raw_for_alpha(alpha or inputs.cfg.density_init_alpha, voxel_of(field) * inputs.cfg.step_voxels,
                                 field.density_scale)
     channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
     values = dr.select(dr.repeat(region, field.width) & (channel == 0), raw, field.data)
@@ -82,6 +88,40 @@ def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
     return mi.Bool(out)
 
 
+def allocate_hidden_surface(inputs, state, depth, stride=2):
+    """The full field with bricks allocated (empty) where the hidden surface's shell lies
+    (:func:`hole_shell`): along the rays of every ``stride``-th masked pixel of the masked views of
+    ``depth`` (view -> full-field median depth map), from the filled depth d to (1 + ``hole_carve_behind``)
+    d. The fit allocated bricks where training rays end; behind an object no ray ends, so without them
+    the background could hold no surface there and the hole would stay transparent. Empty bricks leave
+    the full field's renders as they were."""
+    from .lift import lattice_cells
+    ds, cfg, full = inputs.ds, inputs.cfg, state.fields["full"]
+    grow = int(np.ceil(0.01 * np.hypot(*ds.size)))
+    points = []
+    for v in [v for v in depth if v in set(int(u) for u in ds.masked_train)]:
+        hole = dilate(ds.masks[v], grow)
+        known = np.isfinite(depth[v]) & ~hole
+        if not known.any():
+            continue
+        filled = fill_disparity(np.where(known, depth[v], np.nan), hole, known, camera=ds.cameras[v])
+        py, px = np.nonzero(hole)
+        py, px = py[::stride], px[::stride]
+        o, d = pixel_rays(ds.cameras[v], px + 0.5, py + 0.5)
+        for f in np.linspace(1.0, 1.0 + cfg.hole_carve_behind, 4):
+            points.append(o + f * filled[py, px, None] * d)
+    if not points:
+        return full
+    ijk, ok = lattice_cells(full, inputs.space, np.concatenate(points), 1)
+    ijk = ijk[ok].reshape(-1, 3)
+    s = full.layout.shift
+    need = np.zeros(full.layout.table.shape, bool)
+    need[ijk[:, 2] >> s, ijk[:, 1] >> s, ijk[:, 0] >> s] = True
+    if not (need & (full.layout.table == 0)).any():
+        return full
+    return resample(full, None, need | (full.layout.table > 0))
+
+
 def start_harmonic(inputs, state):
     """Background = full field with the object's visual hull inpainted from around it: a harmonic
     extension of density and colour, so surfaces the object hides (the floor under it) continue
@@ -91,14 +131,19 @@ def start_harmonic(inputs, state):
     vertices of the object's, are inpainted; the others keep the full field's values (the fill's
     boundary). Returns the hull, the object's voxels and those inpainted hull voxels
     (:func:`background_regions`)."""
+    if inputs.cfg.hole_carve:  # room for the hidden surface where no training ray ended
+        from .lift import training_depths
+        state.fields["full"] = allocate_hidden_surface(inputs, state, training_depths(inputs, state, median=True))
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
-    hull, points, obj, refill = background_regions(inputs, state, neighbours)
+    hull, points, obj, refill, solid = background_regions(inputs, state, neighbours, with_solid=True)
     values = harmonic_fill(full.data, full.width, dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull,
                            neighbours)
     # the object itself: empty, its colour the fill's (:func:`emptied`)
     filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
     state.fields["bg"] = emptied(inputs, filled, obj)
+    if solid is not None:  # the hidden surface: opaque from the filled depth on (hole_shell)
+        state.fields["bg"] = emptied(inputs, state.fields["bg"], solid & ~obj, SOLID_ALPHA)
     state.hull_points = points
     return hull, obj, refill
 
@@ -107,7 +152,7 @@ def voxel_of(field):
     return float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
 
 
-def background_regions(inputs, state, neighbours=None):
+def background_regions(inputs, state, neighbours=None, with_solid=False):
     """The visual hull (Float per stored vertex), its vertices' positions, the object's own voxels
     (Bool) and the hull vertices no training view sees unmasked (Bool, :func:`never_seen`) with those
     within ``keep_seen_gap`` vertices of the object's voxels: the object's soft edge, which views see
@@ -119,7 +164,9 @@ def background_regions(inputs, state, neighbours=None):
     that some view sees are no part of it, however opaque, so a low ``object_alpha`` can take in the
     object's soft edge without carving the surfaces beside it; nor is the density hidden behind it,
     where the refit continues the background. With ``hole_carve`` the object's voxels also take in the
-    unseen hull vertices in front of the surface the object hides (:func:`hidden_front`), however faint."""
+    unseen hull vertices in front of the surface the object hides or far behind it (:func:`hole_shell`),
+    however faint; ``with_solid``: also (5th) the unseen vertices from that surface on, which the
+    background starts opaque (None without ``hole_carve``)."""
     from .lift import training_depths
     cfg, full = inputs.cfg, state.fields["full"]
     neighbours = neighbours or neighbour_vertices(full)
@@ -131,31 +178,38 @@ def background_regions(inputs, state, neighbours=None):
     if cfg.object_front:
         candidates |= front
     unseen = never_seen(inputs, full, hull > 0, depth)
-    if cfg.hole_carve:  # unseen space before the hidden surface: the object's or empty, never background
-        candidates |= unseen & hidden_front(inputs, full, unseen, depth)
     obj, refill = unseen & candidates, unseen
     if cfg.keep_seen:  # the object's soft edge is refilled too
         refill = unseen | (dilate_vertices(obj, neighbours, cfg.keep_seen_gap) & (hull > 0))
-    return hull, points, obj, refill
+    solid = None
+    if cfg.hole_carve:  # unseen space before the hidden surface (the object's or empty) and far behind it
+        carve, solid = hole_shell(inputs, full, unseen, depth)
+        obj |= unseen & carve
+    return (hull, points, obj, refill, solid) if with_solid else (hull, points, obj, refill)
 
 
-def hidden_front(inputs, field, candidates, depth):
-    """Bool per stored vertex of ``field``: among ``candidates`` (Bool per stored vertex), those the
+def hole_shell(inputs, field, candidates, depth):
+    """Two Bools per stored vertex of ``field``, among ``candidates`` (Bool per stored vertex): those the
     masked training views of ``depth`` (view -> full-field median depth map) vote in front of the surface
-    the object hides (:func:`~mi_voldis.fit.visibility.before_hidden_surface`; masks grown by 1% of the
-    diagonal as the colour prior's, margin ``hole_carve_margin``). The harmonic fill spreads the
-    density around the hull through all of it, a veil the colour prior then paints: on a forward-facing
-    rig, whose hull reaches far behind the object, a column of haze where the object stood."""
+    the object hides or far behind it (:func:`~mi_voldis.fit.visibility.hidden_surface_side`; masks
+    grown by 1% of the diagonal as the colour prior's, margins ``hole_carve_margin`` and
+    ``hole_carve_behind``), to be emptied; and those behind it but not far, the back of the shell left
+    about that surface, to be made opaque. The harmonic fill spreads the density around the hull through
+    all of it, a veil the colour prior then paints: on a forward-facing rig, whose hull reaches far
+    behind the object, a column of haze where the object stood. Emptied before and behind and opaque
+    from the filled depth on, the hole shows a surface there, which the prior paints."""
     ds, cfg = inputs.ds, inputs.cfg
     pts_scene, real = vertex_positions(field)
     pick = np.flatnonzero(np.array(candidates) & real)
     views = [v for v in depth if v in set(int(u) for u in ds.masked_train)]
     grow = int(np.ceil(0.01 * np.hypot(*ds.size)))
-    front = before_hidden_surface(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
-                                  [depth[v] for v in views], [ds.masks[v] for v in views], grow, cfg.hole_carve_margin)
-    out = np.zeros(len(pts_scene), bool)
-    out[pick[front]] = True
-    return mi.Bool(out)
+    front, far, beyond = hidden_surface_side(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
+                                             [depth[v] for v in views], [ds.masks[v] for v in views], grow,
+                                             cfg.hole_carve_margin, cfg.hole_carve_behind)
+    carve, solid = np.zeros(len(pts_scene), bool), np.zeros(len(pts_scene), bool)
+    carve[pick[front | far]] = True
+    solid[pick[beyond & ~far]] = True
+    return mi.Bool(carve), mi.Bool(solid)
 
 
 def masked_ray_cells(inputs, state, views, reach=2.0, erode=1, visible=0.05, chunk=1 << 16):

@@ -195,11 +195,15 @@ class FitConfig(Settings):
                                        "(bg_strategy 'harmonic', 'guided')")
     hole_carve: bool = setting(True, "unseen hull voxels that the masked training views vote in front of the surface "
                                      "the object hides (each view's full-field depth around its mask filled into it "
-                                     "as disparity) are the object's or empty: emptied in bg and kept so, as the "
-                                     "object's voxels are (bg_strategy 'harmonic', 'guided'): no veil of haze in "
-                                     "front of the hidden surface")
+                                     "as disparity), or far behind it, are emptied in bg and kept so, as the "
+                                     "object's voxels are (bg_strategy 'harmonic', 'guided'): the hole is a shell "
+                                     "about the hidden surface, no veil of haze before it or behind it")
     hole_carve_margin: float = setting(0.05, "with hole_carve, a voxel is in front when nearer than (1 - this) times "
                                              "the filled depth", low=0, high=1)
+    hole_carve_behind: float = setting(0.25, "with hole_carve, unseen hull voxels farther than (1 + this) times the "
+                                             "filled depth are emptied and kept so too: hidden behind the filled "
+                                             "surface, they would show through it as haze while it is not opaque",
+                                       above=0)
     keep_seen: bool = setting(True, "hull voxels some training view sees unmasked keep the full field's density "
                                     "in bg (their colour is refitted; only the unseen voxels and those within "
                                     "keep_seen_gap of the object's are filled and reshaped; bg_strategy "

@@ -60,19 +60,22 @@ def pixel_points(camera, depth, pixels):
     return o + depth.reshape(-1)[pixels, None] * d
 
 
-def before_hidden_surface(points, cameras, depths, masks, grow=0, margin=0.05):
-    """Bool per world point (n, 3): in front of the surface the object hides, by the vote of the views.
+def hidden_surface_side(points, cameras, depths, masks, grow=0, margin=0.05, behind=0.25):
+    """Three Bools per world point (n, 3), by the vote of the views: in front of the surface the object
+    hides, far behind it, and behind it (at or beyond it, far or not).
 
     In each view j whose mask ``masks[j]`` (grown by ``grow`` pixels: edge pixels mix the object in)
     the point projects into, the surface behind the object is taken to continue the surfaces around the
     mask: the full-field depth map ``depths[j]`` (distance along the rays, NaN where a ray ends on
     nothing) filled in the mask as disparity (:func:`~mi_voldis.inpaint2d.fill_disparity`: planes
-    exactly). The point is in front there when its distance is below (1 - ``margin``) times the filled
-    one; it is in front when it is so in more than half of the views that have it in their masks. On a
-    masked ray nothing but the object stands before that surface, so such space is the object's or
-    empty: a background drawn there is a veil in front of the hidden surface (haze in the hole)."""
+    exactly), d_j. The point, at distance t, is in front there when t < (1 - ``margin``) d_j, behind
+    when t >= d_j and far behind when t > (1 + ``behind``) d_j; it is so when it is so in more than half
+    of the views that have it in their masks. On a masked ray nothing but the object stands before that surface, so
+    space in front is the object's or empty (a background drawn there is a veil before the hidden
+    surface: haze in the hole); space far behind is hidden by it, and a background there is seen
+    through the hole wherever the surface is not yet opaque."""
     points = np.asarray(points, np.float64)
-    front, votes = np.zeros(len(points)), np.zeros(len(points))
+    front, back, beyond, votes = (np.zeros(len(points)) for _ in range(4))
     for cam, depth, mask in zip(cameras, depths, masks):
         hole = dilate(mask, grow) if grow else np.asarray(mask, bool)
         known = np.isfinite(depth) & ~hole
@@ -82,6 +85,9 @@ def before_hidden_surface(points, cameras, depths, masks, grow=0, margin=0.05):
         ix, iy, ok = pixel_of(cam, points)
         ok[ok] &= hole[iy[ok], ix[ok]]
         dist = np.linalg.norm(points[ok] - cam.to_world[:3, 3], axis=1)
+        surface = filled[iy[ok], ix[ok]]
         votes[ok] += 1.0
-        front[ok] += dist < (1.0 - margin) * filled[iy[ok], ix[ok]]
-    return (votes > 0) & (front > 0.5 * votes)
+        front[ok] += dist < (1.0 - margin) * surface
+        back[ok] += dist > (1.0 + behind) * surface
+        beyond[ok] += dist >= surface
+    return tuple((votes > 0) & (x > 0.5 * votes) for x in (front, back, beyond))

@@ -206,7 +206,8 @@ def random_scene(seed, views=None, kind=None):
     base, height, radius = _object(scene)
     cam = _rig(rng, base, height, kind)
     orbit = cam["type"] == "orbit"
-    views = views or (40 if orbit else 24)
+    # the harder scenes are smaller (128x96, 30 or 20 views) so that twenty fit a benchmark run of hours
+    views = views or ((40 if orbit else 24) if hard is None else (30 if orbit else 20))
     # a wall close behind the object: half the forward rigs, and the arcs narrow enough to stay before it
     close = hard is not None and kind != "orbit" and hard.uniform() < 0.5
     path = _Handheld(hard, cam, views, (hard.uniform(100, 160) if close else hard.uniform(160, 300))
@@ -281,7 +282,7 @@ def random_scene(seed, views=None, kind=None):
     shift = rng.uniform(0.2, 0.35)
     what = f"random scene, seed {seed}" + (f", {kind} rig" if kind else "")
     rig = {"description": f"{what} (mi_voldis.synth.random_scene)", "object_prefix": "object",
-           "cameras": rig_cam, "views": views, "resolution": [160, 120], "spp": 128,
+           "cameras": rig_cam, "views": views, "resolution": [160, 120] if hard is None else [128, 96], "spp": 128,
            "moved": {"translate": [float(shift * np.cos(angle)), 0.0, float(shift * np.sin(angle))],
                      "rotate": ["y", float(rng.uniform(20, 60))], "scale": 1.0}}
     if orbit:
