@@ -10,8 +10,14 @@ import numpy as np
 from ..bricks import EMPTY_COLOR, EMPTY_DENSITY
 from ..cameras import pixel_rays
 from ..device import from_numpy
-from ..field_state import FieldState, density_raw_for_alpha, dilate_vertices, neighbour_vertices, resample
-from ..field_state import vertex_positions
+from ..field_state import (
+    FieldState,
+    density_raw_for_alpha,
+    dilate_vertices,
+    neighbour_vertices,
+    resample,
+    vertex_positions,
+)
 from ..inpaint2d import fill_disparity
 from ..metrics import dilate
 from ..render import march
