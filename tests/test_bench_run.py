@@ -50,7 +50,7 @@ def family_results(margins):
                    "telea": {"psnr_mask": 20.0, "consistency_psnr": 25.0},
                    "ns": {"psnr_mask": 19.0, "consistency_psnr": 26.5}}
         scenes[scene] = {"half": half, "kind": "arc", "seed": 1000,
-                         "strategies": {s: {"methods": methods} for s in ("guided", "guided-hole_carve")}}
+                         "strategies": {s: {"methods": methods} for s in ("guided", "guided+hole_carve")}}
     return {"date": "2026-11-26", "seconds": 60.0, "machine": {"cpu": "test", "cores": 2}, "scenes": scenes}
 
 

@@ -193,11 +193,12 @@ class FitConfig(Settings):
                                        "sees unmasked are the object too, however faint: the prior cannot paint "
                                        "the background over the object, so the foreground layer covers it whole "
                                        "(bg_strategy 'harmonic', 'guided')")
-    hole_carve: bool = setting(True, "unseen hull voxels that the masked training views vote in front of the surface "
+    hole_carve: bool = setting(False, "unseen hull voxels that the masked training views vote in front of the surface "
                                      "the object hides (each view's full-field depth around its mask filled into it "
                                      "as disparity), or far behind it, are emptied in bg and kept so, as the "
                                      "object's voxels are (bg_strategy 'harmonic', 'guided'): the hole is a shell "
-                                     "about the hidden surface, no veil of haze before it or behind it")
+                                     "about the hidden surface, no veil of haze before it or behind it (off by "
+                                     "default: on the removal family's tuning half it did not win, reports/notes.md)")
     hole_carve_margin: float = setting(0.05, "with hole_carve, a voxel is in front when nearer than (1 - this) times "
                                              "the filled depth", low=0, high=1)
     hole_carve_behind: float = setting(0.25, "with hole_carve, unseen hull voxels farther than (1 + this) times the "
