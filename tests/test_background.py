@@ -11,7 +11,7 @@ from mi_voldis.device import from_numpy
 from mi_voldis.field_state import new_field, vertex_positions
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.lift import lift_pixels, write_surface
-from mi_voldis.fit.visibility import hidden_surface_side, seen_elsewhere
+from mi_voldis.fit.visibility import hidden_depth, hidden_surface_side, seen_elsewhere
 from mi_voldis.inpaint2d import INPAINTERS, fill_disparity, harmonic_fill, has_contrib, inpainter, resolve
 from mi_voldis.metrics import dilate, object_residue
 from mi_voldis.render.views import render_camera
@@ -234,6 +234,25 @@ def test_space_before_the_hidden_plane_and_far_behind_it_is_voted_so_and_the_pla
     assert hidden_surface_side(inside, *args)[0].all()
     far = np.array([[3.0, 0.5, -3.0], [-2.0, 0.0, 2.5]])  # in no mask
     assert not np.any(hidden_surface_side(far, *args))
+
+
+def test_the_hidden_depth_continues_the_plane_behind_not_a_pole_before_the_object():
+    """A pole (a strip at a third of the sphere's depth) along the right side of camera A's mask: the
+    depth filled into the mask continues the plane behind the sphere (within 1% where the plane is
+    the truth), not the pole's depth."""
+    centre, radius, cams, depths, masks = sphere_over_plane_from_two_cameras()
+    cam, mask = cams[0], masks[0]
+    depth = np.where(np.isfinite(depths[0]), depths[0], np.nan)
+    ys, xs = np.nonzero(mask)
+    pole = np.zeros_like(mask)
+    pole[ys.min():ys.max() + 1, xs.max() + 1:xs.max() + 4] = True
+    depth[pole] = depth[mask].min() / 3.0
+    filled = hidden_depth(cam, depth, mask, dilate(mask, 1))
+    truth = plane_depth(cam)
+    inner = mask & ~dilate(~mask, 2) & np.isfinite(truth)
+    assert inner.sum() > 50
+    assert np.median(np.abs(filled[inner] / truth[inner] - 1.0)) < 0.01
+    assert (filled[inner] > 0.8 * truth[inner]).all()
 
 
 def test_the_hull_takes_in_what_an_occluder_hides_but_nothing_behind_a_surface():

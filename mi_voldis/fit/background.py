@@ -18,11 +18,10 @@ from ..field_state import (
     resample,
     vertex_positions,
 )
-from ..inpaint2d import fill_disparity
 from ..metrics import dilate
 from ..render import march
 from .hull import hull_behind_occluders, visual_hull
-from .visibility import hidden_surface_side, in_view
+from .visibility import hidden_depth, hidden_surface_side, in_view
 
 
 def hull_region(inputs, field, neighbours, depth=None):
@@ -107,10 +106,9 @@ def allocate_hidden_surface(inputs, state, depth, stride=2):
     points = []
     for v in [v for v in depth if v in set(int(u) for u in ds.masked_train)]:
         hole = dilate(ds.masks[v], grow)
-        known = np.isfinite(depth[v]) & ~hole
-        if not known.any():
+        filled = hidden_depth(ds.cameras[v], depth[v], ds.masks[v], hole)
+        if filled is None:
             continue
-        filled = fill_disparity(np.where(known, depth[v], np.nan), hole, known, camera=ds.cameras[v])
         py, px = np.nonzero(hole)
         py, px = py[::stride], px[::stride]
         o, d = pixel_rays(ds.cameras[v], px + 0.5, py + 0.5)

@@ -60,6 +60,24 @@ def pixel_points(camera, depth, pixels):
     return o + depth.reshape(-1)[pixels, None] * d
 
 
+def hidden_depth(camera, depth, mask, hole, ring=0.03):
+    """The depth of the surface ``mask`` hides in ``camera``'s view: the full-field depth map ``depth``
+    (distance along the rays, NaN where a ray ends on nothing) filled in ``hole`` (the mask grown) as
+    disparity (:func:`~mi_voldis.inpaint2d.fill_disparity`), from the pixels around it that stand no
+    nearer than the object: whatever is in front of it within ``ring`` of the image diagonal (a pole
+    before the object) joins the hole (:func:`~mi_voldis.fit.guide.inpainting_hole`), as it does for
+    the colour prior; its depth would put the hidden surface in front of the object. None where
+    nothing around the hole has a depth."""
+    from .guide import inpainting_hole
+    hit = np.isfinite(depth)
+    around = int(np.ceil(ring * np.hypot(*depth.shape)))
+    hole = inpainting_hole(hole, np.where(hit, depth, 0.0), hit, np.asarray(mask, bool), around)
+    known = hit & ~hole
+    if not known.any() or not hole.any():
+        return None
+    return fill_disparity(np.where(known, depth, np.nan), hole, known, camera=camera)
+
+
 def hidden_surface_side(points, cameras, depths, masks, grow=0, margin=0.05, behind=0.25):
     """Three Bools per world point (n, 3), by the vote of the views: in front of the surface the object
     hides, far behind it, and behind it (at or beyond it, far or not).
@@ -67,21 +85,21 @@ def hidden_surface_side(points, cameras, depths, masks, grow=0, margin=0.05, beh
     In each view j whose mask ``masks[j]`` (grown by ``grow`` pixels: edge pixels mix the object in)
     the point projects into, the surface behind the object is taken to continue the surfaces around the
     mask: the full-field depth map ``depths[j]`` (distance along the rays, NaN where a ray ends on
-    nothing) filled in the mask as disparity (:func:`~mi_voldis.inpaint2d.fill_disparity`: planes
-    exactly), d_j. The point, at distance t, is in front there when t < (1 - ``margin``) d_j, behind
-    when t >= d_j and far behind when t > (1 + ``behind``) d_j; it is so when it is so in more than half
-    of the views that have it in their masks. On a masked ray nothing but the object stands before that surface, so
-    space in front is the object's or empty (a background drawn there is a veil before the hidden
-    surface: haze in the hole); space far behind is hidden by it, and a background there is seen
-    through the hole wherever the surface is not yet opaque."""
+    nothing) filled in the mask as disparity from what stands no nearer than the object
+    (:func:`hidden_depth`: planes exactly), d_j. The point, at distance t, is in front there when
+    t < (1 - ``margin``) d_j, behind when t >= d_j and far behind when t > (1 + ``behind``) d_j; it is
+    so when it is so in more than half of the views that have it in their masks. On a masked ray
+    nothing but the object stands before that surface, so space in front is the object's or empty (a
+    background drawn there is a veil before the hidden surface: haze in the hole); space far behind
+    is hidden by it, and a background there is seen through the hole wherever the surface is not yet
+    opaque."""
     points = np.asarray(points, np.float64)
     front, back, beyond, votes = (np.zeros(len(points)) for _ in range(4))
     for cam, depth, mask in zip(cameras, depths, masks):
         hole = dilate(mask, grow) if grow else np.asarray(mask, bool)
-        known = np.isfinite(depth) & ~hole
-        if not known.any() or not hole.any():
+        filled = hidden_depth(cam, depth, mask, hole)
+        if filled is None:
             continue
-        filled = fill_disparity(np.where(known, depth, np.nan), hole, known, camera=cam)
         ix, iy, ok = pixel_of(cam, points)
         ok[ok] &= hole[iy[ok], ix[ok]]
         dist = np.linalg.norm(points[ok] - cam.to_world[:3, 3], axis=1)
