@@ -18,7 +18,8 @@ the object (:func:`~mi_voldis.bench.visible.mask_surfaces`); the 2D inpainters o
 :data:`~mi_voldis.inpaint2d.BASELINES` on each held-out view itself (they see the photo around the
 mask) beside them. MASKED_DATASET: fit the
 background with that copy of RUN's dataset (other object masks, e.g. from scripts/make_masks.py);
-scores still use RUN's dataset and its ground-truth masks. ``--set``: settings over RUN's (as
+scores still use RUN's dataset and its ground-truth masks (where RUN's dataset has no masks, a capture
+such as garden with masks made from a box, they use MASKED_DATASET's). ``--set``: settings over RUN's (as
 ``scripts/train.py --set``).
 """
 import json
@@ -177,6 +178,8 @@ def main(argv=None):
             seconds = json.load(f)["seconds"]["phase_bg"]
     os.remove(checkpoint)
     integrator = fit_integrator(inputs, state)
+    if ds.masks is None:  # a capture without masks: scored with the masks the background was fitted with
+        ds = fit_ds
     rows, renders = evaluate(ds, integrator, cfg.hull_dilation, cfg.hull_min_views)
     if not renders:  # nothing to score: previews of the first held-out views all the same
         from ..render.views import render_camera
