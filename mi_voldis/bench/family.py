@@ -71,9 +71,9 @@ def _f(x, digits=2):
     return "-" if x is None or x != x else f"{x:.{digits}f}"
 
 
-def lead(results):
+def lead(results, sheets=None):
     """The lines reports/removal.md leads with: the check half's worst scene and distribution, then a
-    table per half."""
+    table per half; ``sheets``: {scene: contact sheet's file name} shown after them."""
     from ..fit.config import FitConfig
     default = FitConfig().bg_strategy
     md = ["## The removal family: the default judged on scenes it was not chosen on", "",
@@ -115,6 +115,12 @@ def lead(results):
                           f"{_f(r['coverage_iou'])} | "
                           f"{_f(r['haze_mask'], 3)} / {_f(r['haze_outside'], 3)} | {_f(r['residue'])} |")
         md.append("")
+    for scene, sheet in (sheets or {}).items():
+        if sheet:
+            entry = results["scenes"][scene]
+            md += [f"![{scene}]({sheet}) {scene} ({entry['half']} half, {entry['kind']} rig): rows photo, "
+                   "ground-truth background, OpenCV Telea, OpenCV contrib FSR (where installed), then "
+                   + ", ".join(f"`{s}`" for s in entry["strategies"]) + "; columns: the first held-out views.", ""]
     return md
 
 
@@ -131,13 +137,18 @@ def write_family(results, report_dir, command):
     """reports/removal.md rewritten to lead with the family (the removal section's tables after it, from
     removal.json); where ``report_dir`` holds no removal.json, family.md with the family alone. Returns
     the file's path."""
-    from .report import write_removal
+    from .report import _removal_sheet, write_removal
+    os.makedirs(report_dir, exist_ok=True)
+    sheets = {scene: _removal_sheet(entry["fit"]["out"], entry["strategies"],
+                                    os.path.join(report_dir, f"removal_{scene}.png"))
+              for scene, entry in results["scenes"].items() if "out" in entry.get("fit", {})}
     try:
         with open(os.path.join(report_dir, "removal.json")) as f:
             removal = json.load(f)
     except OSError:
         path = os.path.join(report_dir, "family.md")
         with open(path, "w") as f:
-            f.write("\n".join(["# The removal family", "", f"Written by `{command}`.", ""] + lead(results)) + "\n")
+            f.write("\n".join(["# The removal family", "", f"Written by `{command}`.", ""] + lead(results, sheets))
+                    + "\n")
         return path
-    return write_removal(removal, report_dir, "python scripts/bench.py --removal", family=results)
+    return write_removal(removal, report_dir, "python scripts/bench.py --removal", family=results, sheets=sheets)

@@ -200,17 +200,18 @@ def _section_header(title, results, command):
             f"`{results['machine']['variant']}`.", ""]
 
 
-def write_removal(results, report_dir, command, family=None):
+def write_removal(results, report_dir, command, family=None, sheets=None):
     """reports/removal.md: the removal family's lead (``family``, else ``report_dir``/family.json where
-    one is, :mod:`mi_voldis.bench.family`), then one table per scene (strategy rows, OpenCV beside),
-    previews copied beside it. Returns the file's path."""
+    one is, :mod:`mi_voldis.bench.family`; ``sheets``: its contact sheets), then one table per scene
+    (strategy rows, OpenCV beside), previews copied beside it. Returns the file's path."""
     from ..fit.config import FitConfig
     from . import family as removal_family
     default = FitConfig().bg_strategy
     os.makedirs(report_dir, exist_ok=True)
     family = family or removal_family.load(report_dir)
     md = _section_header("Removal by background strategy", results, command)
-    md += (removal_family.lead(family) + ["## The scenes the strategies were first chosen on", ""] if family else [])
+    md += (removal_family.lead(family, sheets) + ["## The scenes the strategies were first chosen on", ""]
+           if family else [])
     md += [
           "Each scene is fitted once with the default command (`scripts/train.py DATA --out RUN "
           "--keep-checkpoints`, no setting); from its full field the background is fitted again with each "
