@@ -89,3 +89,33 @@ def test_the_removal_report_leads_with_the_family_and_stands_alone_without_the_r
     text = open(write_family(results, str(tmp_path), "python scripts/bench.py --family")).read()
     assert text.startswith("# Removal by background strategy")
     assert text.index("The removal family") < text.index("The scenes the strategies were first chosen on")
+
+
+def test_a_capture_without_masks_is_scored_with_the_masks_its_background_was_fitted_with(tiny_dataset, tmp_path):
+    """The removal score of a run on a dataset without masks (a capture such as garden), its background
+    refitted with a copy that has masks (made from a box): the background's haze in the hole and
+    outside it, the residue against Telea's fill and the consistency come from the copy's masks."""
+    import json
+    import shutil
+
+    from mi_voldis.bench.strategies import main as strategies
+    from mi_voldis.fit.config import FitConfig
+    from mi_voldis.fit.run import run_fit
+
+    from conftest import TINY_FIT
+    bare = tmp_path / "bare"
+    shutil.copytree(tiny_dataset, bare)
+    meta = json.loads((bare / "transforms.json").read_text())
+    for frame in meta["frames"]:  # a capture: photos and poses, nothing else
+        for key in ("object_mask_path", "coverage_path", "background_path", "moved_path"):
+            frame.pop(key, None)
+    (bare / "transforms.json").write_text(json.dumps(meta))
+    run = str(tmp_path / "run")
+    run_fit(str(bare), run, FitConfig.from_sources(None, TINY_FIT), progress=False, keep_checkpoints=True)
+    out = tmp_path / "scored"
+    strategies([run, "guided", str(out), str(tiny_dataset)])
+    volume = json.loads((out / "metrics.json").read_text())["methods"]["volume"]
+    assert volume["bg_haze_mask"] is not None and volume["bg_haze_outside"] is not None
+    assert 0.0 <= volume["residue_vs_telea"] <= 1.0
+    assert volume["consistency_psnr"] is not None
+    assert volume["psnr_mask"] is None  # no ground-truth background to score against
