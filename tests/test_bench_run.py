@@ -98,11 +98,11 @@ def test_a_capture_without_masks_is_scored_with_the_masks_its_background_was_fit
     import json
     import shutil
 
+    from conftest import TINY_FIT
+
     from mi_voldis.bench.strategies import main as strategies
     from mi_voldis.fit.config import FitConfig
     from mi_voldis.fit.run import run_fit
-
-    from conftest import TINY_FIT
     bare = tmp_path / "bare"
     shutil.copytree(tiny_dataset, bare)
     meta = json.loads((bare / "transforms.json").read_text())
