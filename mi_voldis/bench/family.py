@@ -67,6 +67,16 @@ def summary(results, strategy, half):
             "met": met, "n": len(rows)}
 
 
+def work_minutes(results):
+    """Minutes the family's fits and background rows took, summed over the scenes (a rerun that reuses
+    them takes seconds; this is what they cost)."""
+    total = 0.0
+    for entry in results["scenes"].values():
+        total += (entry.get("fit", {}).get("metrics") or {}).get("seconds", {}).get("fit", 0.0)
+        total += sum(row.get("seconds") or 0.0 for row in entry["strategies"].values())
+    return total / 60.0
+
+
 def _f(x, digits=2):
     return "-" if x is None or x != x else f"{x:.{digits}f}"
 
@@ -77,8 +87,9 @@ def lead(results, sheets=None):
     from ..fit.config import FitConfig
     default = FitConfig().bg_strategy
     md = ["## The removal family: the default judged on scenes it was not chosen on", "",
-          f"Run {results['date']} (`python scripts/bench.py --family`, {results['seconds'] / 60:.1f} min; "
-          f"{results['machine']['cpu']}, {results['machine']['cores']} cores). Twenty random ground-truth scenes "
+          f"Run {results['date']} (`python scripts/bench.py --family`; the scenes' fits and background rows "
+          f"took {work_minutes(results):.0f} min, summed; {results['machine']['cpu']}, "
+          f"{results['machine']['cores']} cores). Twenty random ground-truth scenes "
           "(`mi_voldis/synth/family.py`, `make_dataset.py --family K`): hand-held arcs and forward rigs with uneven "
           "spacing beside orbits and forward grids (forward-facing as often as not), glossy and patterned floors, "
           "walls close behind the object, occluders, area lights; the first ten tune, the last ten check (fixed "

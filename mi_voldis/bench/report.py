@@ -382,6 +382,8 @@ def _removal_sheet(run, strategies, path, views=3):
     from ..inpaint2d import inpainter
     from ..io.images import contact_sheet, display_to_uint8, write_png
     from ..metrics import dilate
+    if not os.path.isfile(os.path.join(run, "config.json")):  # the run is gone: its sheet, if written, stays
+        return os.path.basename(path) if os.path.isfile(path) else None
     with open(os.path.join(run, "config.json")) as f:
         config = json.load(f)
     record = config["dataset"]
