@@ -119,3 +119,25 @@ def test_a_capture_without_masks_is_scored_with_the_masks_its_background_was_fit
     assert 0.0 <= volume["residue_vs_telea"] <= 1.0
     assert volume["consistency_psnr"] is not None
     assert volume["psnr_mask"] is None  # no ground-truth background to score against
+
+
+def test_a_row_with_the_runs_own_settings_scores_its_background_as_a_refit_would(tiny_dataset, tmp_path):
+    """The default row on a run fitted with today's defaults reuses the run's background (its seconds
+    are the run's background phase); forced to refit (the dataset given again) it scores the same."""
+    import json
+
+    from mi_voldis.bench.strategies import main as strategies
+    from mi_voldis.fit.config import FitConfig
+    from mi_voldis.fit.run import run_fit
+
+    from conftest import TINY_FIT
+    run = str(tmp_path / "run")
+    run_fit(tiny_dataset, run, FitConfig.from_sources(None, TINY_FIT), progress=False, keep_checkpoints=True)
+    strategies([run, "guided", str(tmp_path / "reused")])
+    strategies([run, "guided", str(tmp_path / "refit"), tiny_dataset])
+    reused = json.loads((tmp_path / "reused" / "metrics.json").read_text())
+    refit = json.loads((tmp_path / "refit" / "metrics.json").read_text())
+    bg_seconds = json.loads((tmp_path / "run" / "metrics.json").read_text())["seconds"]["phase_bg"]
+    assert reused["seconds"] == bg_seconds and refit["seconds"] != bg_seconds
+    for key in ("psnr_mask", "psnr_outside", "consistency_psnr", "bg_haze_mask"):
+        assert abs(reused["methods"]["volume"][key] - refit["methods"]["volume"][key]) < 1e-3, key
