@@ -126,11 +126,11 @@ def test_a_row_with_the_runs_own_settings_scores_its_background_as_a_refit_would
     are the run's background phase); forced to refit (the dataset given again) it scores the same."""
     import json
 
+    from conftest import TINY_FIT
+
     from mi_voldis.bench.strategies import main as strategies
     from mi_voldis.fit.config import FitConfig
     from mi_voldis.fit.run import run_fit
-
-    from conftest import TINY_FIT
     run = str(tmp_path / "run")
     run_fit(tiny_dataset, run, FitConfig.from_sources(None, TINY_FIT), progress=False, keep_checkpoints=True)
     strategies([run, "guided", str(tmp_path / "reused")])
