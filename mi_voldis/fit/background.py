@@ -63,14 +63,18 @@ def start_cleared(inputs, state):
 SOLID_ALPHA = 0.5  # opacity per sample step of the hidden surface's vertices as the background starts
 
 
-def emptied(inputs, field, region, alpha=None):
+def emptied(inputs, field, region):
     """``field`` with the vertices of ``region`` (Bool per stored vertex) empty: the initial density of
-    an unfitted field (or that of opacity ``alpha`` per sample step). Their colour stays: colour is
-    interpolated before its activation, so a black vertex beside a surface would darken it; where a
-    whole neighbourhood is empty the colour is cleared at the end of the fit
-    (:func:`clear_empty_background_color`)."""
-    raw = density_raw_for_alpha(alpha or inputs.cfg.density_init_alpha, voxel_of(field) * inputs.cfg.step_voxels,
-                                field.density_scale)
+    an unfitted field. Their colour stays: colour is interpolated before its activation, so a black
+    vertex beside a surface would darken it; where a whole neighbourhood is empty the colour is cleared
+    at the end of the fit (:func:`clear_empty_background_color`)."""
+    return with_opacity(inputs, field, region, inputs.cfg.density_init_alpha)
+
+
+def with_opacity(inputs, field, region, alpha):
+    """``field`` with the density of the vertices of ``region`` (Bool per stored vertex) that of opacity
+    ``alpha`` per sample step, their colour as it was."""
+    raw = density_raw_for_alpha(alpha, voxel_of(field) * inputs.cfg.step_voxels, field.density_scale)
     channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
     values = dr.select(dr.repeat(region, field.width) & (channel == 0), raw, field.data)
     return FieldState(field.layout, values, field.channels, field.to_world.copy(), field.density_scale)
@@ -147,7 +151,7 @@ def start_harmonic(inputs, state):
     filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
     state.fields["bg"] = emptied(inputs, filled, obj)
     if solid is not None:  # the hidden surface: opaque from the filled depth on (hole_shell)
-        state.fields["bg"] = emptied(inputs, state.fields["bg"], solid & ~obj, SOLID_ALPHA)
+        state.fields["bg"] = with_opacity(inputs, state.fields["bg"], solid & ~obj, SOLID_ALPHA)
     state.hull_points = points
     return hull, obj, refill
 
