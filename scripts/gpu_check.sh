@@ -7,7 +7,12 @@
 # Steps (each one's output also in OUT/<step>.log; the exit status is the number of failed steps):
 #   env      Python, Mitsuba / Dr.Jit versions, the GPU (nvidia-smi), OpenCV with or without contrib
 #   tests    MI_VOLDIS_VARIANT=cuda_ad_rgb python -m pytest -q -rfEs tests   (pytest's header names the variant)
-#   profile  python scripts/bench.py --step-profile --variant cuda_ad_rgb      (OUT/step_profile.json)
+#   profile  python scripts/bench.py --step-profile --batch $GPU_CHECK_BATCHES --variant cuda_ad_rgb
+#            (OUT/step_profile.json: each kernel's time, and their share of the step at each batch)
+#   captures python scripts/train.py CAPTURES/NAME --out OUT/captures/NAME --variant cuda_ad_rgb, the default
+#            command, for each NAME of GPU_CHECK_CAPTURES, all at once (OUT/captures_NAME.log): the default
+#            plan is costed in samples, not seconds, so running beside each other changes their wall times
+#            (then upper bounds), not their fits
 #   quick    python scripts/bench.py --quick --variant cuda_ad_rgb --report OUT/report  (runs and datasets
 #            in $TMPDIR, not in OUT; the checkout's reports/ stays as it is)
 #
@@ -16,7 +21,9 @@
 # unpacked to $TMPDIR/site and put on PYTHONPATH first. Knobs: PYTHON (default .venv/bin/python where
 # present, else python3), GPU_BUNDLE (default .gpu/site312.tar.xz), GPU_CHECK_VARIANT (default
 # cuda_ad_rgb), GPU_CHECK_STEPS (default "env tests profile quick"), GPU_CHECK_TESTS (pytest's
-# arguments, default "tests").
+# arguments, default "tests"), GPU_CHECK_BATCHES (rays per profiled step, default "16384,65536,262144"),
+# GPU_CHECK_CAPTURES (default "fern statue garden"), CAPTURES (their folder: default $MI_VOLDIS_CAPTURES,
+# else ../shared/data).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -27,6 +34,9 @@ TMP=${TMPDIR:-/tmp}
 VARIANT=${GPU_CHECK_VARIANT:-cuda_ad_rgb}
 STEPS=${GPU_CHECK_STEPS:-env tests profile quick}
 read -r -a TESTS <<< "${GPU_CHECK_TESTS:-tests}"
+BATCHES=${GPU_CHECK_BATCHES:-16384,65536,262144}
+read -r -a CAPTURE_NAMES <<< "${GPU_CHECK_CAPTURES:-fern statue garden}"
+CAPTURES=${CAPTURES:-${MI_VOLDIS_CAPTURES:-../shared/data}}
 if [ -z "${PYTHON:-}" ]; then
     if [ -x .venv/bin/python ]; then PYTHON=.venv/bin/python; else PYTHON=python3; fi
 fi
@@ -64,9 +74,22 @@ print("python", platform.python_version(), "mitsuba", mi.__version__, "drjit", d
       bool(dr.has_backend(dr.JitBackend.CUDA)))' || return 1
     nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv || echo "nvidia-smi: none"
 }
+captures() {  # the default command on each capture, all at once; fails if any fit fails
+    local name pids=() rc=0
+    for name in "${CAPTURE_NAMES[@]}"; do
+        "$PYTHON" scripts/train.py "$CAPTURES/$name" --out "$DEST/captures/$name" --variant "$VARIANT" \
+            > "$DEST/captures_$name.log" 2>&1 &
+        pids+=("$!")
+    done
+    for pid in "${pids[@]}"; do wait "$pid" || rc=1; done
+    for name in "${CAPTURE_NAMES[@]}"; do echo "== $name"; tail -n 5 "$DEST/captures_$name.log"; done
+    return "$rc"
+}
+
 step env env_info
 step tests "$PYTHON" -m pytest -q -rfEs -p no:cacheprovider "${TESTS[@]}"
-step profile bash -o pipefail -c "\"$PYTHON\" scripts/bench.py --step-profile --variant $VARIANT | tee \"$DEST/step_profile.json\""
+step profile bash -o pipefail -c "\"$PYTHON\" scripts/bench.py --step-profile --batch $BATCHES --variant $VARIANT | tee \"$DEST/step_profile.json\""
+step captures captures
 step quick "$PYTHON" scripts/bench.py --quick --variant "$VARIANT" --work "$TMP/gpu_check_bench" --report "$DEST/report"
 
 say ""

@@ -70,6 +70,8 @@ def test_inpainters_are_named_or_callable():
     hole = np.zeros((20, 24), bool)
     hole[6:12, 8:16] = True
     for name in INPAINTERS:
+        if name == "fsr" and not has_contrib():  # its refusal there: the test below
+            continue
         out = inpainter(name)(image, hole)
         assert out.shape == image.shape and np.isfinite(out).all()
         np.testing.assert_allclose(out[~hole], image[~hole], atol=1 / 255 + 1e-6)
@@ -101,7 +103,7 @@ def test_fsr_continues_stripes_that_telea_smears():
 
 def test_fsr_without_the_contrib_modules_says_what_to_install(monkeypatch):
     import cv2
-    monkeypatch.delattr(cv2, "xphoto")
+    monkeypatch.delattr(cv2, "xphoto", raising=False)  # an OpenCV without them already lacks it
     with pytest.raises(RuntimeError, match="opencv-contrib-python-headless"):
         inpainter("fsr")(np.zeros((8, 8, 3), np.float32), np.ones((8, 8), bool))
 
@@ -160,7 +162,7 @@ def test_a_fit_without_its_inpainter_stops_before_fitting_anything(monkeypatch, 
 
     from mi_voldis.fit.train import fit
     ds, cfg, *_ = synthetic_object_scene(views=5)
-    monkeypatch.delattr(cv2, "xphoto")
+    monkeypatch.delattr(cv2, "xphoto", raising=False)
     checkpoint = tmp_path / "state.npz"
     with pytest.raises(RuntimeError, match="prior_inpainter"):
         fit(ds, str(checkpoint), cfg.replace(prior_inpainter="fsr"), progress=False)

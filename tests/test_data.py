@@ -327,6 +327,8 @@ def test_transforms_errors(tmp_path, breakage, message, culprit):
     ("fern", 20, (378, 504), False, "ndc"), ("statue", 29, (378, 504), True, "ndc"),
     ("lego_200", 200, (200, 200), False, "world")])
 def test_real_captures_load(name, views, size, has_masks, kind):
+    if not os.path.isdir(os.path.join(SHARED, name)):  # a folder of some captures (a GPU machine's copy)
+        pytest.skip(f"capture {name} not present in {SHARED}")
     ds = load_dataset(os.path.join(SHARED, name))
     assert len(ds.images) == views and ds.size == size and ds.box.kind == kind
     assert (ds.masks is not None) == has_masks

@@ -78,4 +78,15 @@ def test_training_step_builds_no_kernel_after_warmup(record):
     profile = step_profile(resolution=12, samples=16, batch=256, steps=3, warmup=2, record=record)
     assert profile["compiled"] == 0
     assert profile["primal_ms"] > 0 and profile["adjoint_ms"] > 0
+    # the kernels' share of the step: their time over the step's, which holds them
+    kernels = profile["primal_ms"] + profile["adjoint_ms"] + profile["other_kernels_ms"]
+    assert 0 < profile["kernel_share"] <= 1 and kernels <= profile["step_ms"] * 1.05
     assert march.RECORD_BYTES == limit
+
+
+@pytest.mark.parametrize("batch", ["0", "16k", "1024,,2048"])
+def test_the_step_profile_refuses_a_bad_batch_in_one_line(batch, capsys):
+    from voldis_cli.bench import main
+    with pytest.raises(SystemExit) as stop:
+        main(["--step-profile", "--batch", batch])
+    assert str(stop.value) == f"error: --batch {batch!r}: expected positive whole numbers, comma-separated"

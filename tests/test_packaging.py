@@ -70,7 +70,10 @@ def test_the_installed_package_finds_its_scene_and_runs_the_benchmarks_dataset_c
         "run.child(['scripts/make_dataset.py', scene, '--out', sys.argv[1], '--views', '3', '--res', '16x12',\n"
         "           '--spp', '1', '--quiet'], sys.argv[2])\n"
         "print(json.dumps({'package': mi_voldis.__file__, 'scene': scene, 'root': run.ROOT}))\n")
-    env = {**os.environ, "PYTHONPATH": str(site)}
+    # the wheel first; what else PYTHONPATH holds (the dependencies where they are not installed, as on a
+    # machine given them as a folder) after it
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(site)] + [p for p in os.environ.get("PYTHONPATH", "")
+                                                                      .split(os.pathsep) if p])}
     done = subprocess.run([sys.executable, "-c", code, str(out), str(tmp_path / "child.log")], capture_output=True,
                           text=True, cwd=tmp_path, env=env, timeout=300)
     assert done.returncode == 0, done.stderr + (tmp_path / "child.log").read_text()
@@ -105,7 +108,9 @@ def test_the_wheel_installed_by_pip_into_a_fresh_venv_runs_its_commands(wheel, t
     python = venv / "bin" / "python"
     purelib = subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
                              capture_output=True, text=True, timeout=60).stdout.strip()
-    deps = [p for p in site.getsitepackages() + [sysconfig.get_path("purelib"), sysconfig.get_path("platlib")]
+    given = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)  # dependencies given as folders
+             if p and os.path.abspath(p) != os.path.abspath(ROOT)]
+    deps = [p for p in site.getsitepackages() + [sysconfig.get_path("purelib"), sysconfig.get_path("platlib")] + given
             if os.path.isdir(p)]
     with open(os.path.join(purelib, "_test_dependencies.pth"), "w") as f:
         f.write("\n".join(dict.fromkeys(deps)) + "\n")

@@ -11,6 +11,7 @@ import pytest
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.schedule import (
     COST_EXPONENT,
+    StepCost,
     affordable_resolution,
     rescale,
     resolution_at,
@@ -32,7 +33,7 @@ def test_stages_double_up_to_the_final_resolution_and_start_at_the_given_fractio
 
 def test_steps_fill_the_budget_under_the_cost_model():
     plan = [(0.0, 64), (0.5, 128)]
-    steps = steps_for(plan, 0.01, 100.0)
+    steps = steps_for(plan, StepCost(0.01, 64), 100.0)
     cost = 0.01 * (0.5 * steps + 0.5 * steps * 2 ** COST_EXPONENT)
     assert abs(cost - 100.0) < 0.01 * 2 ** COST_EXPONENT + 1e-9
     assert schedule_of(plan, steps, 10) == [[0, 64], [round(0.5 * steps), 128]]
@@ -47,7 +48,7 @@ PIXELS = 40_000_000  # training pixels: enough for any grid below
 def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_of_the_last_stage():
     cfg = FitConfig().for_backend("llvm").replace(max_memory_gib=1e4)  # memory no bound here
     seconds, budget = 0.01, 600.0
-    r = affordable_resolution(cfg, 64, seconds, budget, SURVEY, PIXELS)
+    r = affordable_resolution(cfg, StepCost(seconds, 64), budget, SURVEY, PIXELS)
     last_share = 1.0 - cfg.stage_starts[-1]
 
     def observations(res):  # rays ending per surface cell over the last stage at resolution res
@@ -57,13 +58,13 @@ def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_
     assert r % 16 == 0
     # the cells were counted on a finer grid: the same surface, the same answer
     finer = dict(SURVEY, surface_cells=SURVEY["surface_cells"] * 4, surface_resolution=128)
-    assert affordable_resolution(cfg, 64, seconds, budget, finer, PIXELS) == r
+    assert affordable_resolution(cfg, StepCost(seconds, 64), budget, finer, PIXELS) == r
     # twice the budget buys a finer grid; a surface twice as large a coarser one; never below the coarse grid
-    assert affordable_resolution(cfg, 64, seconds, 2 * budget, SURVEY, PIXELS) > r
-    assert affordable_resolution(cfg, 64, seconds, budget, dict(SURVEY, surface_cells=4e4), PIXELS) < r
-    assert affordable_resolution(cfg, 64, seconds, 1e-3, SURVEY, PIXELS) == 64
+    assert affordable_resolution(cfg, StepCost(seconds, 64), 2 * budget, SURVEY, PIXELS) > r
+    assert affordable_resolution(cfg, StepCost(seconds, 64), budget, dict(SURVEY, surface_cells=4e4), PIXELS) < r
+    assert affordable_resolution(cfg, StepCost(seconds, 64), 1e-3, SURVEY, PIXELS) == 64
     # few pixels: no more surface cells than pixels end on them, whatever the budget
-    few = affordable_resolution(cfg, 64, seconds, 1e6, SURVEY, 200_000)
+    few = affordable_resolution(cfg, StepCost(seconds, 64), 1e6, SURVEY, 200_000)
     assert SURVEY["surface_cells"] * (few / 64) ** 2 <= 200_000 * SURVEY["ray_hits"] < \
         SURVEY["surface_cells"] * ((few + 16) / 64) ** 2
 
@@ -71,10 +72,10 @@ def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_
 def test_affordable_resolution_keeps_the_estimated_memory_within_max_memory_gib():
     from mi_voldis.fit.schedule import BYTES_PER_SURFACE_CELL
     cfg = FitConfig().for_backend("llvm")
-    r = affordable_resolution(cfg, 64, 1e-6, 1e6, SURVEY, PIXELS)  # time and pixels buy any grid
+    r = affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, PIXELS)  # time and pixels buy any grid
     bytes_at = lambda res: SURVEY["surface_cells"] * (res / 64) ** 2 * BYTES_PER_SURFACE_CELL  # noqa: E731
     assert bytes_at(r) <= cfg.max_memory_gib * 2 ** 30 < bytes_at(r + 16)
-    assert affordable_resolution(cfg.replace(max_memory_gib=16.0), 64, 1e-6, 1e6, SURVEY, PIXELS) == 2 * r
+    assert affordable_resolution(cfg.replace(max_memory_gib=16.0), StepCost(1e-6, 64), 1e6, SURVEY, PIXELS) == 2 * r
 
 
 def test_surface_cells_is_the_effective_number_of_cells_rays_end_in():
@@ -93,18 +94,69 @@ def test_surface_cells_is_the_effective_number_of_cells_rays_end_in():
 def test_rescale_fits_the_stages_ahead_to_the_budget_left():
     schedule, steps = [[0, 64], [200, 128], [400, 256]], 1000
     cost = 200 * 0.01 * 2 ** COST_EXPONENT + 600 * 0.01 * 4 ** COST_EXPONENT  # of what is ahead at step 200
-    half, steps_half = rescale(schedule, steps, 200, 0.01, 64, cost / 2)
+    half, steps_half = rescale(schedule, steps, 200, StepCost(0.01, 64), cost / 2)
     assert half == [[0, 64], [200, 128], [300, 256]] and steps_half == 600
-    double, steps_double = rescale(schedule, steps, 200, 0.01, 64, 2 * cost)
+    double, steps_double = rescale(schedule, steps, 200, StepCost(0.01, 64), 2 * cost)
     assert double == [[0, 64], [200, 128], [600, 256]] and steps_double == 1800
-    late, steps_late = rescale(schedule, steps, 400, 0.02, 128, 0.0)  # out of time: one step per stage left
+    late, steps_late = rescale(schedule, steps, 400, StepCost(0.02, 128), 0.0)  # out of time: one step per stage left
     assert late == [[0, 64], [200, 128], [400, 256]] and steps_late == 401
     # within the last stage, timed on itself: 300 steps left at 0.05 s, 7.5 s of budget -> 150 steps
-    mid, steps_mid = rescale(schedule, steps, 700, 0.05, 256, 7.5)
+    mid, steps_mid = rescale(schedule, steps, 700, StepCost(0.05, 256), 7.5)
     assert mid == schedule and steps_mid == 850
     # within a stage that has one after it: both shrink in proportion, the current one keeps its start
-    inner, steps_inner = rescale(schedule, steps, 300, 0.01, 128, (100 * 0.01 + 600 * 0.01 * 2 ** COST_EXPONENT) / 2)
+    ahead = 100 * 0.01 + 600 * 0.01 * 2 ** COST_EXPONENT
+    inner, steps_inner = rescale(schedule, steps, 300, StepCost(0.01, 128), ahead / 2)
     assert inner == [[0, 64], [200, 128], [350, 256]] and steps_inner == 650
+
+
+def test_a_step_costs_the_hosts_fixed_time_plus_kernels_that_grow_with_the_resolution():
+    cost = StepCost(0.004, 64, host=0.005)
+    assert cost.at(64) == pytest.approx(0.009)
+    assert cost.at(128) == pytest.approx(0.005 + 0.004 * 2 ** COST_EXPONENT)
+    # a step timed at 9 ms on a backend whose host takes 5: the kernels took 4; a step shorter than the
+    # host's estimate keeps a tenth of itself for its kernels
+    timed, short = StepCost.timed(0.009, 64, 0.005), StepCost.timed(0.004, 64, 0.005)
+    assert (timed.kernels, timed.resolution, timed.host) == (pytest.approx(0.004), 64, 0.005)
+    assert (short.kernels, short.host) == (pytest.approx(0.0004), pytest.approx(0.0036))
+    # the steps that fill a budget pay the host once each: 100 s at 9 ms (64^3) and 13.55 ms (128^3), half each
+    plan = [(0.0, 64), (0.5, 128)]
+    steps = steps_for(plan, cost, 100.0)
+    assert steps == int(100.0 / (0.5 * cost.at(64) + 0.5 * cost.at(128)))
+    # rescaled the same way: the budget ahead over the cost ahead
+    ahead, end = rescale([[0, 64], [500, 128]], 1000, 500, cost, 500 * float(cost.at(128)) / 2)
+    assert ahead == [[0, 64], [500, 128]] and end == 750
+
+
+def test_a_host_bound_backend_affords_a_finer_grid_than_one_whose_step_grows_with_it():
+    """At the same seconds a coarse step, a step mostly the host's (a GPU's) grows slowly with the
+    resolution, so the same budget ends min_observations rays per cell on a finer grid."""
+    cfg = FitConfig().for_backend("cuda").replace(max_memory_gib=1e4, batch_rays=8192)
+    budget = 60.0
+    kernels_only = affordable_resolution(cfg, StepCost(0.01, 64), budget, SURVEY, PIXELS)
+    host_bound = affordable_resolution(cfg, StepCost(0.002, 64, host=0.008), budget, SURVEY, PIXELS)
+    assert host_bound > kernels_only
+    last_share = 1.0 - cfg.stage_starts[-1]
+    cost = StepCost(0.002, 64, host=0.008)
+
+    def observations(res):
+        steps = last_share * budget / cost.at(res)
+        return steps * cfg.batch_rays * SURVEY["ray_hits"] / (SURVEY["surface_cells"] * (res / 64) ** 2)
+    assert observations(host_bound) >= cfg.min_observations > observations(host_bound + 16)
+
+
+def test_the_plan_names_the_bound_that_chose_its_grid(monkeypatch):
+    import mi_voldis.fit.train as train
+    monkeypatch.setattr(train, "capture_survey", lambda *a: SURVEY)
+    cfg = FitConfig().for_backend("llvm").replace(min_steps=0, max_memory_gib=0.05)  # memory binds first
+    state = planned(cfg, calibrated(0.01, 0.01 * cfg.reference_msps * 1e6))
+    bounds = state.plan["resolution_bounds"]
+    assert state.plan["final_resolution"] == bounds["memory"] == min(bounds.values()) < bounds["observations"]
+    assert "the memory (max_memory_gib) affords" in train.describe_plan(state)
+    # with memory no bound, the few pixels of the test's views are
+    state = planned(cfg.replace(max_memory_gib=1e4), calibrated(0.01, 0.01 * cfg.reference_msps * 1e6))
+    bounds = state.plan["resolution_bounds"]
+    assert state.plan["final_resolution"] == bounds["pixels"] == min(bounds.values()) < bounds["memory"]
+    assert "the training pixels afford" in train.describe_plan(state)
 
 
 def test_a_budgeted_fit_plans_from_the_capture_and_reports_its_plan(tiny_dataset, tmp_path):
@@ -182,7 +234,7 @@ def test_the_default_plan_is_costed_at_the_reference_speed_whatever_the_machine(
     state = planned(cfg, calibrated(0.01 * load, samples))
     budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
     assert state.plan["coarse_step_seconds"] == pytest.approx(0.01)
-    assert state.steps_full == max(steps_for(stages(cfg, 64, 256), 0.01, budget), 500)
+    assert state.steps_full == max(steps_for(stages(cfg, 64, 256), StepCost(0.01, 64), budget), 500)
     PLANS[load] = (state.schedule, state.steps_full)
     assert PLANS[load] == PLANS.get(1.0, PLANS[load])  # a faster or slower machine plans the same fit
     from mi_voldis.fit.train import replan
@@ -202,14 +254,14 @@ def test_the_default_resolution_is_the_finest_the_reference_speed_affords(monkey
     for load in (1.0, 4.0):
         state = planned(cfg, calibrated(0.01 * load, samples))
         budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
-        assert state.plan["final_resolution"] == affordable_resolution(cfg, 64, 0.01, budget, SURVEY,
+        assert state.plan["final_resolution"] == affordable_resolution(cfg, StepCost(0.01, 64), budget, SURVEY,
                                                                        4 * 100 * 100) < 1024
 
 
 def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked():
     cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=5000)
     state = planned(cfg, calibrated(0.5, 0.01 * cfg.reference_msps * 1e6))  # a slow machine changes nothing
-    budgeted = steps_for(stages(cfg, 64, 256), 0.01, state.plan["budget_seconds"] - 2.0)
+    budgeted = steps_for(stages(cfg, 64, 256), StepCost(0.01, 64), state.plan["budget_seconds"] - 2.0)
     assert budgeted < 5000 and state.plan["min_steps"] == 5000 and state.schedule[-1][1] == 256
     assert state.steps_full == 5000
 
@@ -242,8 +294,9 @@ def test_the_plan_is_reported_in_one_line():
 
 
 def test_the_default_plan_follows_the_backend(monkeypatch):
-    """'auto' batch, reference speed and budget are the backend's: on cuda a coarse step of the same samples
-    is costed 15x cheaper, the budget is shorter, the batch larger, and the plan buys more steps."""
+    """'auto' batch, reference speed, host time, memory and budget are the backend's: on cuda a coarse step
+    of the same samples costs the host's fixed milliseconds plus its kernels at the faster speed, the budget
+    is shorter, the batch larger, the memory bound higher."""
     from types import SimpleNamespace
 
     import mi_voldis.fit.train as train
@@ -256,11 +309,15 @@ def test_the_default_plan_follows_the_backend(monkeypatch):
     for which in ("llvm", "cuda"):
         monkeypatch.setattr(train, "backend", lambda w=which: w)
         cfg = FitConfig().replace(resolution=256, min_steps=0).for_backend(which)
-        assert cfg.batch_rays == BACKENDS[which].batch_rays and cfg.reference_msps == BACKENDS[which].reference_msps
+        b = BACKENDS[which]
+        assert (cfg.batch_rays, cfg.reference_msps, cfg.host_ms, cfg.max_memory_gib) == \
+            (b.batch_rays, b.reference_msps, b.host_ms, b.max_memory_gib)
         plans[which] = planned(cfg, calibrated(0.01, 0.01 * 18e6)).plan  # the same samples a coarse step
     assert plans["llvm"]["coarse_step_seconds"] == pytest.approx(0.01)
-    assert plans["cuda"]["coarse_step_seconds"] == pytest.approx(0.01 * 18 / 270)
+    cuda = BACKENDS["cuda"]
+    assert plans["cuda"]["coarse_step_seconds"] == pytest.approx(cuda.host_ms / 1e3 + 0.01 * 18 / cuda.reference_msps)
+    assert plans["cuda"]["host_ms"] == cuda.host_ms > 0 == plans["llvm"]["host_ms"]
     assert plans["cuda"]["minutes"] == 1.0 and plans["llvm"]["minutes"] == 1.5
     # explicit values stay
-    cfg = FitConfig().replace(batch_rays=1000, reference_msps=5.0).for_backend("cuda")
-    assert (cfg.batch_rays, cfg.reference_msps) == (1000, 5.0)
+    cfg = FitConfig().replace(batch_rays=1000, reference_msps=5.0, host_ms=0.0, max_memory_gib=2.0).for_backend("cuda")
+    assert (cfg.batch_rays, cfg.reference_msps, cfg.host_ms, cfg.max_memory_gib) == (1000, 5.0, 0.0, 2.0)

@@ -7,7 +7,8 @@
     python scripts/bench.py --family [--work out/bench] [--report reports] [--scenes family00,...]
     python scripts/bench.py --spinnerf [--work out/bench] [--report reports] [--scenes family10,...]
                             [--lpips-weights DIR]
-    python scripts/bench.py --step-profile [--rays random|tiles]   (a training step by kernel, record on and off)
+    python scripts/bench.py --step-profile [--rays random|tiles] [--batch N,...]   (a training step by kernel,
+                            record on and off; with several batches the record at each)
 
 Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
 PNG plots. --quick is a smoke run of a few minutes; the full run fits every bundled scene, capture and
@@ -38,6 +39,9 @@ def main(argv=None):
                     help="only profile one training step (128^3, 128 samples/ray, 16k rays) by kernel")
     ap.add_argument("--rays", default="random", choices=("random", "tiles"),
                     help="--step-profile: random rays or fitting's tiled batches")
+    ap.add_argument("--batch", default="16384", metavar="N[,N...]",
+                    help="--step-profile: rays per step; several profile the record at each (the kernels' share "
+                         "of a step grows with the batch where the host's work per step is fixed)")
     ap.add_argument("--scenes", help="comma-separated scenes whose fits and tasks run (default: all); finished "
                                      "runs in --work with the same settings are reused")
     ap.add_argument("--removal", action="store_true",
@@ -62,9 +66,21 @@ def main(argv=None):
         import json
 
         from mi_voldis.bench.throughput import step_profile
-        # the record (adjoint replays the primal's lookup values) against reading the grid again
-        print(json.dumps({"record": step_profile(rays=args.rays),
-                          "no_record": step_profile(rays=args.rays, record=False)}, indent=1))
+        try:
+            batches = [int(b) for b in args.batch.split(",")]
+            if min(batches) < 1:
+                raise ValueError
+        except ValueError:
+            raise SystemExit(f"error: --batch {args.batch!r}: expected positive whole numbers, comma-separated"
+                             ) from None
+        # the record (adjoint replays the primal's lookup values) against reading the grid again, at the
+        # first batch; the record at every other batch
+        out = {"record": step_profile(rays=args.rays, batch=batches[0]),
+               "no_record": step_profile(rays=args.rays, batch=batches[0], record=False)}
+        if len(batches) > 1:
+            out["by_batch"] = {str(b): out["record"] if b == batches[0] else step_profile(rays=args.rays, batch=b)
+                               for b in batches}
+        print(json.dumps(out, indent=1))
         return
     from mi_voldis.bench import report
     from mi_voldis.bench.family import run_family, write_family

@@ -37,15 +37,15 @@ def make_integrator(resolution, samples, channels=3, seed=0, representation="bri
 
 
 def trainer(resolution, samples, channels=3, fields=("full",), rays="random", representation="bricks"):
-    """(integrator, step function): ``step(batch, seed)`` runs one training step as fitting does
-    (forward, backward, Adam on the packed grids) on fresh ``rays`` and returns the samples evaluated."""
+    """(integrator, step function): ``step(o, d, u)`` runs one training step as fitting does (forward,
+    backward, Adam on the packed grids) on the rays ``o``, ``d`` with jitters ``u`` (:func:`device_rays`)
+    and returns the samples evaluated."""
     integ = make_integrator(resolution, samples, channels, representation=representation)
     params = PackedParameters({role: integ.fields[role] for role in fields})
     adam = Adam({key: 1e-2 for key in params})
     target = mi.Color3f(0.5, 0.4, 0.3)
 
-    def step(batch, seed):
-        o, d, u = device_rays(rays, batch, seed)
+    def step(o, d, u):
         for key in params:
             dr.enable_grad(params[key])
         params.update()
@@ -75,7 +75,7 @@ def step_functions(resolution, samples, batch, channels=3, fields=("full",), ray
         return evaluated
 
     def train(seed):
-        evaluated = train_step(batch, seed)
+        evaluated = train_step(*device_rays(rays, batch, seed))
         dr.sync_thread()
         return evaluated
     return {"forward": forward, "train": train}
@@ -120,9 +120,12 @@ def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, w
 def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, rays="random", record=True):
     """Where a training step's time goes, from Dr.Jit's kernel history (median ms over ``steps``):
     the primal march kernel, the adjoint march kernel (the two kernels of ``batch`` threads), every
-    other kernel (packing, gradients, Adam), the step's wall-clock time, and ``compiled``: kernels
+    other kernel (packing, gradients, Adam), the step's wall-clock time, ``kernel_share``: the kernels'
+    time over the step's (the rest is the host's: tracing, launching, waiting), and ``compiled``: kernels
     built (not found in a cache) during the profiled steps, which should be 0. ``record=False``: the
-    adjoint reads the grid again instead of the primal's record (:class:`march.Record`)."""
+    adjoint reads the grid again instead of the primal's record (:class:`march.Record`). Each step's rays
+    are on the device before it starts (fitting draws them from its ray bank there), so NumPy's ray
+    generation is not charged to the step."""
     _, train_step = trainer(resolution, samples, rays=rays)
     limit = march.RECORD_BYTES
     march.RECORD_BYTES = limit if record else 0
@@ -130,13 +133,16 @@ def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, ra
     rows = []
     try:
         for k in range(warmup):
-            train_step(batch, k)
+            train_step(*device_rays(rays, batch, k))
         dr.sync_thread()
         dr.set_flag(dr.JitFlag.KernelHistory, True)
         for k in range(steps):
+            o, d, u = device_rays(rays, batch, warmup + k)
+            dr.eval(o, d, u)
+            dr.sync_thread()
             dr.kernel_history()  # drop what came before
             t = time.perf_counter()
-            evaluated = train_step(batch, warmup + k)
+            evaluated = train_step(o, d, u)
             dr.sync_thread()
             wall = 1e3 * (time.perf_counter() - t)
             kernels = [h for h in dr.kernel_history() if "execution_time" in h]
@@ -145,7 +151,7 @@ def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, ra
             total = sum(h["execution_time"] for h in kernels)
             primal, adjoint = widest  # the only kernels as wide as the batch
             rows.append({"primal_ms": primal, "adjoint_ms": adjoint, "other_kernels_ms": total - primal - adjoint,
-                         "step_ms": wall, "msps": evaluated / wall / 1e3,
+                         "step_ms": wall, "msps": evaluated / wall / 1e3, "kernel_share": total / wall,
                          "compiled": sum(not h.get("cache_hit", True) for h in kernels)})
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, flag)

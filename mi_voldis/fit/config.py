@@ -69,11 +69,15 @@ class FitConfig(Settings):
                                                   "costed at reference_msps, and min_steps at least; a number: "
                                                   "minutes of this machine's wall clock; null: steps_full)",
                                         check=_minutes_error)
-    reference_msps: float | str = setting("auto", "with minutes 'auto', the coarse stage's speed the plan assumes, "
-                                                  "in M samples/s ('auto': the backend's, mi_voldis.fit.schedule."
-                                                  "BACKENDS: 18 on llvm, the project's 2-core machine; 270 on cuda): "
-                                                  "the plan depends on the capture and the backend, not on how fast "
-                                                  "or busy this machine is", check=_auto_or(False, above=0))
+    reference_msps: float | str = setting("auto", "with minutes 'auto', the coarse stage's kernel speed the plan "
+                                                  "assumes, in M samples/s ('auto': the backend's, mi_voldis.fit."
+                                                  "schedule.BACKENDS: 18 on llvm, the project's 2-core machine; "
+                                                  "1000 on cuda): the plan depends on the capture and the backend, "
+                                                  "not on how fast or busy this machine is",
+                                          check=_auto_or(False, above=0))
+    host_ms: float | str = setting("auto", "milliseconds a training step costs whatever its size (tracing, launches, "
+                                           "reading the loss back), added to its kernels' time in the plan ('auto': "
+                                           "the backend's, 0 on llvm, 5 on cuda)", check=_auto_or(False, low=0))
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
     min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
                                    "overrunning the budget where it allows fewer (the resolution is chosen "
@@ -87,9 +91,11 @@ class FitConfig(Settings):
                                             "many training rays in every cell where rays end (surfaces): a grid "
                                             "seen too few times is worse than a coarser one seen often",
                                       above=0)
-    max_memory_gib: float = setting(4.0, "with resolution 'auto', the fit's peak memory is estimated from the "
-                                         "final grid's surface cells (mi_voldis.fit.schedule."
-                                         "BYTES_PER_SURFACE_CELL) to stay within this many GiB", above=0)
+    max_memory_gib: float | str = setting("auto", "with resolution 'auto', the fit's peak memory is estimated from "
+                                                  "the final grid's surface cells (mi_voldis.fit.schedule."
+                                                  "BYTES_PER_SURFACE_CELL) to stay within this many GiB ('auto': "
+                                                  "the backend's, 4 of RAM on llvm, 32 of the GPU's on cuda)",
+                                          check=_auto_or(False, above=0))
     coarse_resolution: int = setting(64, "resolution of the first stage", low=4)
     stages: int = setting(4, "coarse-to-fine stages, each doubling the resolution", low=1, high=8)
     stage_starts: list = setting([0.1, 0.2, 0.35], "where stages 2, 3, ... start, as fractions of steps_full",
@@ -234,8 +240,8 @@ class FitConfig(Settings):
         """These settings with what is 'auto' per backend (``which``: 'llvm' or 'cuda') made explicit."""
         from .schedule import BACKENDS
         b = BACKENDS[which]
-        return self.replace(reference_msps=b.reference_msps if self.reference_msps == "auto" else self.reference_msps,
-                            batch_rays=b.batch_rays if self.batch_rays == "auto" else self.batch_rays)
+        return self.replace(**{key: getattr(b, key) for key in ("reference_msps", "host_ms", "batch_rays",
+                                                                 "max_memory_gib") if getattr(self, key) == "auto"})
 
     def check(self):
         if self.minutes is None and self.steps_full is None:

@@ -11,18 +11,21 @@ derived from the capture and the time budget once the first, coarse stage has ru
   than a coarser one seen often. Observations, not passes over the pixels, are the currency: a capture
   with more views never gets a coarser grid than the same scene with fewer;
 * ``stages`` resolutions double up to it, each starting at its ``stage_starts`` fraction of the steps;
-* the number of steps (``steps_full``, or from ``minutes``) fills the budget, with the seconds a step
-  took in the coarse stage scaled to each stage's resolution as (R_k / R_1)^COST_EXPONENT (measured: a
-  step costs its samples, proportional to R, and its vertices, to R^2 on surfaces), leaving
+* the number of steps (``steps_full``, or from ``minutes``) fills the budget, a step at resolution R_k
+  costing host + kernels (R_k / R_1)^COST_EXPONENT (:class:`StepCost`; measured: the kernels cost a
+  step's samples, proportional to R, and its vertices, to R^2 on surfaces; the host's part is fixed
+  per step, nothing on a CPU, most of a step on a GPU), with the kernels' seconds timed or costed in
+  the coarse stage, leaving
   ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation;
 * the default budget (``minutes`` 'auto', :func:`auto_minutes`) is costed at a reference speed, not
   timed: a coarse step takes its evaluated samples (counted in the calibration steps, which depend on
-  the capture alone) over ``reference_msps``, the coarse stage's speed on the backend's reference
-  machine (:data:`BACKENDS`: the project's 2-core machine for llvm, an H100 for cuda; the budget and
-  the batch follow the backend too). A capture so gets the same grid and steps on every machine of a
-  backend, loaded or idle, fast or slow, and a resumed fit ends where an uninterrupted one would; the
-  fit then runs at least ``min_steps`` steps (a small capture's budget buys fewer: the extra steps go
-  to the grid the budget picked, as a grid seen too few times stays hazy, not to a finer one);
+  the capture alone) over ``reference_msps``, the kernels' speed on the backend's reference machine,
+  plus ``host_ms`` (:data:`BACKENDS`: the project's 2-core machine for llvm, an H200 for cuda; the
+  budget, the batch and the memory bound follow the backend too). A capture so gets the same grid and
+  steps on every machine of a backend, loaded or idle, fast or slow, and a resumed fit ends where an
+  uninterrupted one would; the fit then runs at least ``min_steps`` steps (a small capture's budget
+  buys fewer: the extra steps go to the grid the budget picked, as a grid seen too few times stays
+  hazy, not to a finer one);
 * a budget given in minutes is this machine's wall clock: the seconds per step are timed, and at the
   start of every later stage and every ``REPLAN_EVERY`` steps the steps still to come are rescaled to
   the budget that is left (:func:`rescale`), with the seconds a step took in the stage just finished or
@@ -41,22 +44,51 @@ RESERVED = 0.2
 
 @dataclass(frozen=True)
 class Backend:
-    """What the default plan assumes of a Dr.Jit backend: the coarse stage's speed (M samples/s), the
-    budget per million training pixels and its bounds (minutes), and the rays of a step."""
+    """What the default plan assumes of a Dr.Jit backend: the coarse stage's kernel speed (M samples/s)
+    and the host's fixed milliseconds per step (:class:`StepCost`), the budget per million training
+    pixels and its bounds (minutes), the rays of a step and the memory a fit may take (GiB)."""
     reference_msps: float
+    host_ms: float
     minutes_per_mpx: float
     minutes: tuple
     batch_rays: int
+    max_memory_gib: float
 
 
 # llvm: the project's 2-core machine, idle (the 64^3 calibration steps: tabletop 18.4, random 4 17.9, fern 16.4,
-# statue 18.2, garden 20.0, horns 14.7 M samples/s; reports/notes.md). cuda: one H100 ran fern's plan 15x faster
-# than llvm, a step at 16k rays mostly host overhead (7.2 ms, 0.8 ms in kernels; issue #42), so larger batches
-# cost little more per step: 4x the rays at 15x the reference speed, and a budget a fifth as long.
+# statue 18.2, garden 20.0, horns 14.7 M samples/s; reports/notes.md), where the kernels are the step; 4 GiB of
+# RAM (issue #42's bound). cuda: one H200 (reports/gpu.md): a fit's step took 4.9-5.1 ms plus 1.0-1.1 ms per
+# million samples, fern, the statue and garden alike, from 1 M to 4 M samples a step, so its host's share is
+# fixed and its kernels run about 1000 M samples/s; 32 GiB of the card's memory (an H100 has 80).
 BACKENDS = {
-    "llvm": Backend(reference_msps=18.0, minutes_per_mpx=2.5, minutes=(1.5, 10.0), batch_rays=8192),
-    "cuda": Backend(reference_msps=270.0, minutes_per_mpx=0.5, minutes=(1.0, 5.0), batch_rays=32768),
+    "llvm": Backend(reference_msps=18.0, host_ms=0.0, minutes_per_mpx=2.5, minutes=(1.5, 10.0), batch_rays=8192,
+                    max_memory_gib=4.0),
+    "cuda": Backend(reference_msps=1000.0, host_ms=5.0, minutes_per_mpx=0.5, minutes=(1.0, 5.0), batch_rays=32768,
+                    max_memory_gib=32.0),
 }
+
+
+@dataclass(frozen=True)
+class StepCost:
+    """Seconds of a training step at resolution R:
+
+        host + kernels (R / resolution)^COST_EXPONENT
+
+    ``kernels``: the seconds of a step's kernels at ``resolution`` (they grow with its samples and
+    vertices); ``host``: what a step costs whatever its size (tracing, launches, the loss read back), the
+    whole step on a GPU at small batches and nothing on a CPU."""
+    kernels: float
+    resolution: int
+    host: float = 0.0
+
+    def at(self, resolution):
+        return self.host + self.kernels * (np.asarray(resolution, np.float64) / self.resolution) ** COST_EXPONENT
+
+    @classmethod
+    def timed(cls, seconds, resolution, host=0.0):
+        """The cost of a step timed at ``seconds`` at ``resolution``: what is not the host's is the
+        kernels' (a tenth of the step at least, should the host's estimate exceed the step)."""
+        return cls(max(seconds - host, 0.1 * seconds), resolution, min(host, 0.9 * seconds))
 
 
 def backend():
@@ -159,37 +191,46 @@ def stages(cfg, coarse, final):
 BYTES_PER_SURFACE_CELL = 150 * 580
 
 
-def affordable_resolution(cfg, coarse, seconds_per_step, budget_seconds, survey, pixels):
-    """The finest resolution R whose last stage (its share of the budget, stage_starts[-1] to the end)
-    still ends ``min_observations`` training rays in each cell where rays end, a step at resolution R
-    costing ``seconds_per_step`` (R / coarse)^COST_EXPONENT and surfaces holding
-    ``surface_cells`` (R / surface_resolution)^2 cells (``survey``: :func:`capture_survey`), and whose
-    surface cells are no more than the ``pixels`` training pixels that end on them over
-    ``pixels_per_voxel``^2 (a cell no pixel ends in has nothing to fit). Rays, not passes over the pixels,
-    are the currency: a capture with more views buys the same grid or a finer one.
+def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
+    """The finest resolution R (a multiple of 16, at least the coarse one, ``cost.resolution``) each rule
+    allows: {"observations": R whose last stage (its share of the budget, stage_starts[-1] to the end)
+    still ends ``min_observations`` training rays in each cell where rays end, a step at R costing
+    ``cost.at(R)`` (:class:`StepCost`) and surfaces holding ``surface_cells`` (R / surface_resolution)^2
+    cells (``survey``: :func:`capture_survey`); "pixels": R whose surface cells are no more than the
+    ``pixels`` training pixels that end on them over ``pixels_per_voxel``^2 (a cell no pixel ends in has
+    nothing to fit); "memory": R whose estimated peak memory stays within ``max_memory_gib``}. Rays, not
+    passes over the pixels, are the currency: a capture with more views buys the same grid or a finer one.
 
-        steps(R) = share budget / (seconds (R / coarse)^e),   rays(R) = steps(R) batch hits
+        steps(R) = share budget / cost(R),   rays(R) = steps(R) batch hits
         rays(R) / (cells (R / R_s)^2) >= min_observations
-        => R <= coarse (share budget batch hits R_s^2 / (seconds cells coarse^2 min_observations))^(1 / (e + 2))
         cells (R / R_s)^2 <= pixels hits / pixels_per_voxel^2
         cells (R / R_s)^2 BYTES_PER_SURFACE_CELL <= max_memory_gib
     """
+    coarse = cost.resolution
     share = 1.0 - (cfg.stage_starts[-1] if cfg.stage_starts else 0.0)
-    rays = share * budget_seconds / seconds_per_step * cfg.batch_rays * survey["ray_hits"]
     cells = survey["surface_cells"] * (coarse / survey["surface_resolution"]) ** 2  # at the coarse resolution
-    ratio = (rays / (cells * cfg.min_observations)) ** (1.0 / (COST_EXPONENT + 2.0))
-    seen = (pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5
-    memory = (cfg.max_memory_gib * 2 ** 30 / BYTES_PER_SURFACE_CELL / cells) ** 0.5
-    return int(max(coarse, 16 * np.floor(coarse * min(ratio, seen, memory) / 16)))
+    grid = np.arange(16 * -(-coarse // 16), max(cfg.max_resolution, coarse) + 1, 16, dtype=np.float64)
+    rays = share * budget_seconds / cost.at(grid) * cfg.batch_rays * survey["ray_hits"]
+    seen = rays >= cells * (grid / coarse) ** 2 * cfg.min_observations  # fewer as R grows: the finest is the bound
+
+    def finest(limit):  # multiple of 16 at most coarse * limit, at least coarse
+        return int(max(coarse, 16 * np.floor(coarse * limit / 16)))
+    return {"observations": int(grid[seen].max()) if seen.any() else int(coarse),
+            "pixels": finest((pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5),
+            "memory": finest((cfg.max_memory_gib * 2 ** 30 / BYTES_PER_SURFACE_CELL / cells) ** 0.5)}
 
 
-def steps_for(plan_stages, seconds_per_step, budget_seconds):
-    """Steps whose cost fills ``budget_seconds``, a step at resolution R costing
-    ``seconds_per_step`` (R / R_coarse)^COST_EXPONENT."""
-    coarse = plan_stages[0][1]
+def affordable_resolution(cfg, cost, budget_seconds, survey, pixels):
+    """The finest resolution all rules of :func:`resolution_bounds` allow."""
+    return min(resolution_bounds(cfg, cost, budget_seconds, survey, pixels).values())
+
+
+def steps_for(plan_stages, cost, budget_seconds):
+    """Steps whose cost fills ``budget_seconds``, a step at resolution R costing ``cost.at(R)``
+    (:class:`StepCost`)."""
     shares = np.diff([f for f, _ in plan_stages] + [1.0])
-    cost = sum(share * (level / coarse) ** COST_EXPONENT for share, (_, level) in zip(shares, plan_stages))
-    return int(budget_seconds / (seconds_per_step * cost))
+    per_step = sum(share * cost.at(level) for share, (_, level) in zip(shares, plan_stages))
+    return int(budget_seconds / per_step)
 
 
 def schedule_of(plan_stages, steps, first):
@@ -204,18 +245,17 @@ def schedule_of(plan_stages, steps, first):
 REPLAN_EVERY = 100  # steps between rescalings within a stage (and at every stage start)
 
 
-def rescale(schedule, steps_full, step, seconds_per_step, measured_resolution, budget_left):
+def rescale(schedule, steps_full, step, cost, budget_left):
     """(schedule, steps_full) with the steps from ``step`` on stretched or shrunk in proportion so that
-    their cost fills ``budget_left`` seconds, a step at ``measured_resolution`` having cost
-    ``seconds_per_step`` and a step at resolution R that times (R / measured)^COST_EXPONENT. What is
-    ahead is the rest of the stage holding ``step`` and the stages after it; each keeps at least one
-    step; the steps before ``step`` are unchanged."""
+    their cost fills ``budget_left`` seconds, a step at resolution R costing ``cost.at(R)``
+    (:class:`StepCost`, timed on the stage run last). What is ahead is the rest of the stage holding
+    ``step`` and the stages after it; each keeps at least one step; the steps before ``step`` are
+    unchanged."""
     k = max(i for i, (start, _) in enumerate(schedule) if start <= step)
     starts = [step] + [start for start, _ in schedule[k + 1:]]
     levels = np.array([r for _, r in schedule[k:]], np.float64)
     lengths = np.diff(starts + [steps_full]).astype(np.float64)
-    cost = seconds_per_step * (levels / measured_resolution) ** COST_EXPONENT
-    factor = max(budget_left, 0.0) / float(np.dot(lengths, cost))
+    factor = max(budget_left, 0.0) / float(np.dot(lengths, cost.at(levels)))
     lengths = np.maximum(1, np.round(lengths * factor)).astype(int)
     new_starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
     ahead = [[int(s), r] for s, (_, r) in zip(new_starts[1:], schedule[k + 1:])]

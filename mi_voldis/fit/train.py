@@ -70,12 +70,13 @@ from .lift import keys_mask, lift_prior
 from .problem import FieldFit
 from .schedule import (
     RESERVED,
-    affordable_resolution,
+    StepCost,
     auto_minutes,
     backend,
     capture_survey,
     coarse_resolution,
     rescale,
+    resolution_bounds,
     schedule_of,
     stages,
     steps_for,
@@ -263,8 +264,9 @@ def replan(state, step):
     rows = rows[len(rows) // 5:]  # past the stage's first steps (kernels compiling, occupancy starting)
     if len(rows) < 10:
         return
-    state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, float(np.median(rows)),
-                                               state.schedule[timed][1], budget - state.log[-1]["time"])
+    cost = StepCost.timed(float(np.median(rows)), state.schedule[timed][1], plan.get("host_ms", 0.0) / 1e3)
+    state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, cost,
+                                               budget - state.log[-1]["time"])
     state.plan.setdefault("rescaled", []).append([step, state.steps_full])
 
 
@@ -284,29 +286,35 @@ def plan_schedule(inputs, state, integrator):
         first = cfg.calibration_steps // 5  # past the first steps (kernels compiling)
         rows = [r for r in state.log if r["step"] > first and "test_psnr" not in r]
         minutes = auto_minutes(inputs.ds, backend()) if cfg.minutes == "auto" else cfg.minutes
+        host = cfg.host_ms / 1e3
         if cfg.minutes == "auto":  # costed at the reference speed: the same plan on every machine, loaded or not
-            seconds = float(np.median([r["samples"] for r in rows])) / (cfg.reference_msps * 1e6)
-            spent = cfg.calibration_steps * seconds
+            kernels = float(np.median([r["samples"] for r in rows])) / (cfg.reference_msps * 1e6)
+            cost = StepCost(kernels, coarse, host)
+            spent = cfg.calibration_steps * float(cost.at(coarse))
             state.plan.update(min_steps=cfg.min_steps, reference_msps=cfg.reference_msps)
         else:  # this machine's wall clock, re-timed as the fit runs (:func:`replan`)
-            seconds = float(np.median([r["step_seconds"] for r in rows]))
+            cost = StepCost.timed(float(np.median([r["step_seconds"] for r in rows])), coarse, host)
             spent = state.log[-1]["time"] if state.log else 0.0
         budget = minutes * 60.0 * (1.0 - RESERVED) - spent
-        state.plan.update(minutes=float(minutes), coarse_step_seconds=seconds,
+        state.plan.update(minutes=float(minutes), coarse_step_seconds=float(cost.at(coarse)), host_ms=cfg.host_ms,
                           budget_seconds=minutes * 60.0 * (1.0 - RESERVED))
         if survey is not None and survey["surface_cells"]:
-            state.plan["affordable_resolution"] = int(affordable_resolution(cfg, coarse, seconds, budget, survey,
-                                                                            inputs.bank.pixels))
+            bounds = resolution_bounds(cfg, cost, budget, survey, inputs.bank.pixels)
+            state.plan.update(resolution_bounds=bounds, affordable_resolution=min(bounds.values()))
             final = min(final, state.plan["affordable_resolution"])
     state.plan["final_resolution"] = int(final)
     plan_stages = stages(cfg, coarse, final)
     if cfg.steps_full is not None:
         steps = cfg.steps_full
     else:
-        steps = max(2 * cfg.calibration_steps, steps_for(plan_stages, seconds, budget),
+        steps = max(2 * cfg.calibration_steps, steps_for(plan_stages, cost, budget),
                     state.plan.get("min_steps", 0))
     state.steps_full = steps
     state.schedule = schedule_of(plan_stages, steps, cfg.calibration_steps)
+
+
+BOUND_NAMES = {"observations": "the budget affords", "pixels": "the training pixels afford",
+               "memory": "the memory (max_memory_gib) affords"}
 
 
 def describe_plan(state):
@@ -319,7 +327,9 @@ def describe_plan(state):
         line += f" ({plan['minutes']:.1f} min {clock})"
     line += f"; the capture asks {plan['capture_resolution']}"
     if plan.get("affordable_resolution", plan["capture_resolution"]) < plan["capture_resolution"]:
-        line += f", the budget affords {plan['affordable_resolution']}"
+        bounds = plan.get("resolution_bounds", {"observations": plan["affordable_resolution"]})
+        bound = min(bounds, key=bounds.get)
+        line += f", {BOUND_NAMES[bound]} {plan['affordable_resolution']}"
     return line
 
 

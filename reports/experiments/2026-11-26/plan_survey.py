@@ -19,7 +19,7 @@ from mi_voldis.optim.adam import Adam
 
 name, path, checkpoint = sys.argv[1:4]
 space = sys.argv[4] if len(sys.argv) > 4 else "auto"
-memory = float(sys.argv[5]) if len(sys.argv) > 5 else FitConfig().max_memory_gib
+memory = float(sys.argv[5]) if len(sys.argv) > 5 else "auto"
 dataset = load_dataset(path, "auto", 8, None)
 cfg = FitConfig().replace(space=space, max_memory_gib=memory).for_backend("llvm")
 inputs = FitInputs.of(dataset, cfg, "/dev/null", False)
@@ -27,7 +27,8 @@ state = FitState.load(checkpoint, Adam({}, 0.9, 0.99))
 survey = schedule.capture_survey(inputs, fit_integrator(inputs, state), state)
 plan = state.plan
 budget = plan["budget_seconds"] - cfg.calibration_steps * plan["coarse_step_seconds"]
-afford = {m: schedule.affordable_resolution(cfg.replace(min_observations=m), 64, plan["coarse_step_seconds"], budget,
-                                            survey, inputs.bank.pixels) for m in (16, 32, 64, 128, 256)}
+cost = schedule.StepCost(plan["coarse_step_seconds"], 64)  # llvm: the kernels are the step
+afford = {m: schedule.affordable_resolution(cfg.replace(min_observations=m), cost, budget, survey, inputs.bank.pixels)
+          for m in (16, 32, 64, 128, 256)}
 print(name, "effective cells", round(survey["surface_cells"]), "ray hits", round(survey["ray_hits"], 3), "asks",
       survey["capture_resolution"], "affords by min_observations", afford)
