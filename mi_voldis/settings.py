@@ -67,7 +67,12 @@ def check_field(f, value):
 
 
 class Settings:
-    """Mixin for ``@dataclass`` settings: validation, sources, JSON and help text."""
+    """Mixin for ``@dataclass`` settings: validation, sources, JSON and help text.
+
+    ``ADDED`` (a class attribute): settings added after runs were recorded, each with the value that
+    leaves a fit as it was before the setting existed; a run's config.json without one reads as that
+    value (:meth:`recorded`), so a finished run stays comparable and reusable."""
+    ADDED = {}
 
     def __post_init__(self):
         for f in dataclasses.fields(self):
@@ -94,6 +99,12 @@ class Settings:
         return dataclasses.asdict(self)
 
     @classmethod
+    def recorded(cls, data):
+        """The settings a run's config.json object ``data`` holds: the record keys left out, the
+        settings added since (``ADDED``) at the values that fitted as it was fitted where it lacks them."""
+        return {**cls.ADDED, **{k: v for k, v in data.items() if k not in RECORD_KEYS}}
+
+    @classmethod
     def from_sources(cls, path=None, overrides=(), **values):
         """Defaults, then the JSON object in ``path`` (a settings file, or a run's config.json, whose
         record keys are skipped), then ``values``, then ``--set`` ``overrides`` ("name=value", the
@@ -110,9 +121,8 @@ class Settings:
             if not isinstance(data, dict):
                 raise ValueError(f"{path}: settings must be a JSON object of name: value, got a "
                                  f"{type(data).__name__}")
-            data = {k: v for k, v in data.items() if k not in RECORD_KEYS}
             try:
-                cfg = cfg.replace(**data)
+                cfg = cfg.replace(**cls.recorded(data))
             except (TypeError, ValueError) as e:
                 raise ValueError(f"{path}: {e}") from None
         try:

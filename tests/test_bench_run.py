@@ -39,6 +39,34 @@ def test_a_finished_run_is_recognised_with_its_resolved_settings(tiny_run):
     assert not finished(tiny_run, os.path.dirname(dataset), TINY_FIT)  # another dataset
 
 
+def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, tmp_path):
+    """A run's config.json from before a setting existed (FitConfig.ADDED) reads as the value that fitted as
+    it was fitted: the bench and the strategy rows reuse it, and read back it makes the same settings."""
+    import json
+    import shutil
+
+    from conftest import TINY_FIT
+
+    from mi_voldis.bench.run import finished
+    from mi_voldis.bench.strategies import same_settings
+    from mi_voldis.fit.config import FitConfig
+    old = tmp_path / "old"
+    shutil.copytree(tiny_run, old)
+    with open(old / "config.json") as f:
+        config = json.load(f)
+    dataset = config["dataset"]["path"]
+    assert set(FitConfig.ADDED) <= set(config)
+    for key in FitConfig.ADDED:
+        del config[key]
+    with open(old / "config.json", "w") as f:
+        json.dump(config, f)
+    assert finished(str(old), dataset, TINY_FIT)
+    cfg = FitConfig.from_sources(str(old / "config.json"))
+    assert same_settings(str(old), cfg) and cfg.host_ms == FitConfig.ADDED["host_ms"]
+    # a value other than the one it was fitted with is another fit
+    assert not finished(str(old), dataset, TINY_FIT + ["host_ms=5"])
+
+
 def family_results(margins):
     """Removal-family results (mi_voldis.bench.family) with the default row's in-mask PSNR 20 + margin
     over Telea (20) and Navier-Stokes (19) per scene: {scene: (half, margin)}."""

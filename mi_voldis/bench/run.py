@@ -160,10 +160,8 @@ def finished(out, dataset, sets, ignore=()):
     except (OSError, ValueError):
         return False
     from ..fit.schedule import backend
-    from ..settings import RECORD_KEYS
     record = config.get("dataset", {})
-    for key in RECORD_KEYS:  # what was fitted, on what: not settings
-        config.pop(key, None)
+    config = FitConfig.recorded(config)  # what was fitted, on what, aside; settings added since at their old values
     same_data = os.path.realpath(record.get("path", "")) == os.path.realpath(dataset)
     expected = FitConfig.from_sources(None, sets).for_backend(backend()).to_dict()  # 'auto' as a run records it
     for key in ignore:

@@ -50,11 +50,12 @@ def refit_config(run, strategy, sets=()):
 
 def same_settings(run, cfg):
     """``run``'s config.json holds exactly the settings ``cfg`` resolves to on this backend (what was
-    fitted on what, :data:`~mi_voldis.settings.RECORD_KEYS`, aside)."""
+    fitted on what, :data:`~mi_voldis.settings.RECORD_KEYS`, aside; settings added since it was fitted
+    at the values it was fitted with: :meth:`~mi_voldis.settings.Settings.recorded`)."""
+    from ..fit.config import FitConfig
     from ..fit.schedule import backend
-    from ..settings import RECORD_KEYS
     with open(os.path.join(run, "config.json")) as f:
-        recorded = {k: v for k, v in json.load(f).items() if k not in RECORD_KEYS}
+        recorded = FitConfig.recorded(json.load(f))
     return recorded == cfg.for_backend(backend()).to_dict()
 
 

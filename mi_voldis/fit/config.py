@@ -54,6 +54,8 @@ def _fractions_error(value):
 
 @dataclass
 class FitConfig(Settings):
+    ADDED = {"host_ms": 0.0}  # plans before it had no host term  (not a field: no annotation)
+
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
                                  "'world' (the dataset's box), 'ndc' (forward-facing captures) or 'auto' "
