@@ -108,6 +108,44 @@ def pixel_of(camera, points):
     return ix, iy, (z > 0) & (ix >= 0) & (ix < camera.width) & (iy >= 0) & (iy < camera.height)
 
 
+class DevicePoints:
+    """World points (n, 3) held on the device, for tests that ask every view about every point (the
+    visual hull, what views see): each view's projection, gathers from its images and the sums run as
+    Dr.Jit kernels (on the GPU with a CUDA variant), in float64 as :func:`project` computes, the view's
+    numbers passed as opaque values so that one kernel serves every view."""
+
+    def __init__(self, points):
+        from .device import from_numpy
+        self.count = len(points)
+        self.points = from_numpy(mi.Point3d, np.asarray(points, np.float64).reshape(-1, 3))
+
+    def pixel_of(self, camera):
+        """Flat pixel index (y width + x, UInt32) of each point in ``camera`` and whether it lies in the
+        frame, in front of the camera (Bool; the index is 0 where it does not): :func:`pixel_of`."""
+        inv = np.linalg.inv(np.asarray(camera.to_world, np.float64))
+        m = [dr.opaque(mi.Float64, float(v)) for v in inv[:3, :4].ravel()]
+        p = self.points
+        x, y, z = (m[4 * r] * p.x + m[4 * r + 1] * p.y + m[4 * r + 2] * p.z + m[4 * r + 3] for r in range(3))
+        tx, ty, ox, oy = (dr.opaque(mi.Float64, float(v)) for v in (*camera.tan_scale, *camera.principal))
+        u, v = camera_to_film(x, y, z, tx, ty, ox, oy)
+        w, h = dr.opaque(mi.Float64, float(camera.width)), dr.opaque(mi.Float64, float(camera.height))
+        fx, fy = dr.floor(w * u), dr.floor(h * v)
+        ok = (z > 0) & (fx >= 0) & (fx < w) & (fy >= 0) & (fy < h)
+        return dr.select(ok, mi.UInt32(mi.Int32(fy)) * camera.width + mi.UInt32(mi.Int32(fx)), 0), ok
+
+    def distance(self, camera):
+        """Distance (Float64) of each point from ``camera``'s centre."""
+        o = np.asarray(camera.to_world, np.float64)[:3, 3]
+        return dr.norm(self.points - mi.Point3d(*(dr.opaque(mi.Float64, float(v)) for v in o)))
+
+
+def device_image(values, cls):
+    """An image (H, W) or (H, W, C) as a flat Dr.Jit array of ``cls`` (``mi.Bool``, ``mi.Float64``),
+    pixel y W + x at index (y W + x) C + c: what :meth:`DevicePoints.pixel_of`'s indices gather."""
+    from .device import from_numpy
+    return from_numpy(cls, np.asarray(values).reshape(-1))
+
+
 TABLE_WIDTH = 16  # floats per camera in a CameraTable: rotation (9), origin (3), tan_x, tan_y, offsets (2)
 
 

@@ -26,7 +26,8 @@ def aligned(values, dtype):
 def from_numpy(cls, values):
     """``cls`` (a Dr.Jit array type: ``mi.Float``, ``mi.UInt32``, ``mi.Point3f``, ...) holding
     ``values``: shape (n,) for a scalar type, (n, k) for a type of k components."""
-    dtype = np.uint32 if dr.type_v(cls) == dr.VarType.UInt32 else np.float32
+    dtype = {dr.VarType.UInt32: np.uint32, dr.VarType.Float64: np.float64, dr.VarType.Bool: np.bool_}.get(
+        dr.type_v(cls), np.float32)
     if dr.depth_v(cls) == 1:
         return cls(aligned(values, dtype))
     values = np.asarray(values)

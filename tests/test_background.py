@@ -939,3 +939,76 @@ def test_the_hole_shows_a_surface_at_the_hidden_floor_even_where_the_fit_kept_no
     assert np.median(alpha) > 0.95 and alpha.min() > 0.7 and np.median(error) < 2 * 2.0 / 39, \
         (np.median(alpha), alpha.min(), np.median(error))
     assert np.median(seen[False][0]) < 0.5, np.median(seen[False][0])
+
+
+def _reference_hull(points, cameras, masks, min_fraction, depths=None, tol=0.05):
+    """The visual hull's rule in NumPy, every view projecting every point (what the kernels must equal)."""
+    from mi_voldis.cameras import pixel_of
+    seen = np.zeros(len(points), int)
+    inside = np.zeros(len(points), int)
+    for k, (cam, mask) in enumerate(zip(cameras, masks)):
+        ix, iy, ok = pixel_of(cam, points)
+        hit = np.zeros(len(points), bool)
+        hit[ok] = mask[iy[ok], ix[ok]]
+        if depths is not None and depths[k] is not None:
+            dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
+            hidden = np.zeros(len(points), bool)
+            hidden[ok] = depths[k][iy[ok], ix[ok]] < (1.0 - tol) * dist[ok]
+            ok &= hit | ~hidden
+        seen += ok
+        inside += hit
+    return (seen > 0) & (inside >= min_fraction * seen)
+
+
+def test_the_hull_and_visibility_kernels_answer_as_numpy_does_view_by_view():
+    """visual_hull, in_view and seen_elsewhere run each view as a Dr.Jit kernel over every point
+    (DevicePoints): the same booleans and colours as NumPy's projection of every point into every view,
+    on random views, disc masks and depth maps with holes (NaN), whatever the fraction."""
+    from mi_voldis.cameras import Camera, look_at
+    from mi_voldis.fit.hull import visual_hull
+    from mi_voldis.fit.visibility import in_view, seen_elsewhere
+    rng = np.random.default_rng(7)
+    h, w = 30, 40
+    cams, masks, depths = [], [], []
+    for _ in range(9):
+        direction = rng.normal(size=3)
+        cams.append(Camera(look_at(3.0 * direction / np.linalg.norm(direction), rng.normal(0, 0.2, 3)), 50.0, w, h))
+        y, x = np.mgrid[:h, :w]
+        masks.append((x - rng.uniform(10, 30)) ** 2 + (y - rng.uniform(8, 22)) ** 2 < rng.uniform(20, 120))
+        depth = rng.uniform(1.5, 4.0, (h, w))
+        depth[rng.random((h, w)) < 0.1] = np.nan
+        depths.append(depth)
+    masks = np.array(masks)
+    points = rng.uniform(-1.2, 1.2, (4000, 3))
+    for fraction in (0.5, 0.9, 1.0):
+        for given in (None, depths, [d if k % 3 else None for k, d in enumerate(depths)]):
+            got = visual_hull(points, cams, masks, 0, fraction, given)
+            assert np.array_equal(got, _reference_hull(points, cams, masks, fraction, given)), (fraction, given is None)
+            assert got.any() and not got.all()
+    expected_view = np.zeros(len(points), bool)
+    expected_seen = np.zeros(len(points), bool)
+    from mi_voldis.cameras import pixel_of
+    for cam, depth, mask in zip(cams, depths, masks):
+        ix, iy, ok = pixel_of(cam, points)
+        ok[ok] &= ~mask[iy[ok], ix[ok]]
+        dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
+        view, near = ok.copy(), ok.copy()
+        view[ok] &= ~(depth[iy[ok], ix[ok]] < 0.95 * dist[ok])
+        near[ok] &= np.abs(depth[iy[ok], ix[ok]] - dist[ok]) <= 0.03 * dist[ok]
+        expected_view |= view
+        expected_seen |= near
+    assert np.array_equal(in_view(points, cams, depths, masks), expected_view) and expected_view.any()
+    assert np.array_equal(seen_elsewhere(points, cams, depths, masks), expected_seen) and expected_seen.any()
+    images = [rng.random((h, w, 3)) for _ in cams]
+    seen, colour = seen_elsewhere(points, cams, depths, masks, images)
+    assert np.array_equal(seen, expected_seen) and np.isnan(colour[~seen]).all()
+    total, count = np.zeros((len(points), 3)), np.zeros(len(points))
+    for cam, depth, mask, image in zip(cams, depths, masks, images):  # the mean colour of the views that see it
+        ix, iy, ok = pixel_of(cam, points)
+        ok[ok] &= ~mask[iy[ok], ix[ok]]
+        dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
+        ok[ok] &= np.abs(depth[iy[ok], ix[ok]] - dist[ok]) <= 0.03 * dist[ok]
+        total[ok] += image[iy[ok], ix[ok]]
+        count[ok] += 1
+    np.testing.assert_allclose(colour[seen], total[seen] / count[seen, None], rtol=1e-12)
+    assert len(visual_hull(points[:0], cams, masks, 0, 0.9)) == 0 == len(in_view(points[:0], cams, depths, masks))

@@ -6,9 +6,11 @@ mask in at least a fraction ``min_fraction`` of the views that see it, not neces
 the views' depth maps, a view whose surface at the point's pixel lies nearer than the point, outside
 its mask, does not vote (:func:`hull_behind_occluders`, which the background's hull adds).
 """
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 
-from ..cameras import pixel_of
+from ..cameras import DevicePoints, device_image
 from ..metrics import dilate
 from .visibility import seen_elsewhere
 
@@ -16,23 +18,24 @@ from .visibility import seen_elsewhere
 def visual_hull(points, cameras, masks, dilation_px, min_fraction, depths=None, tol=0.05):
     """Boolean per world point: inside the hull carved by ``masks`` (N, H, W) seen from ``cameras``.
     With ``depths`` (per camera a depth map or None), a camera abstains for a point outside its mask
-    behind something nearer than (1 - ``tol``) times the point's distance (an occluder hides it there)."""
+    behind something nearer than (1 - ``tol``) times the point's distance (an occluder hides it there).
+    Each view's vote is a kernel over every point (:class:`~mi_voldis.cameras.DevicePoints`)."""
+    if len(points) == 0:
+        return np.zeros(0, bool)
     masks = dilate(masks, dilation_px)
-    seen = np.zeros(len(points), np.int32)
-    inside = np.zeros(len(points), np.int32)
+    at = DevicePoints(points)
+    seen, inside = dr.zeros(mi.UInt32, at.count), dr.zeros(mi.UInt32, at.count)
     for k, (cam, mask) in enumerate(zip(cameras, masks)):
-        ix, iy, ok = pixel_of(cam, points)
-        hit = np.zeros(len(points), bool)
-        hit[ok] = mask[iy[ok], ix[ok]]
+        index, ok = at.pixel_of(cam)
+        hit = ok & dr.gather(mi.Bool, device_image(mask, mi.Bool), index, ok)
         depth = None if depths is None else depths[k]
-        if depth is not None:
-            dist = np.linalg.norm(points - np.asarray(cam.to_world)[:3, 3], axis=1)
-            hidden = np.zeros(len(points), bool)
-            hidden[ok] = depth[iy[ok], ix[ok]] < (1.0 - tol) * dist[ok]  # NaN (nothing there): votes
+        if depth is not None:  # NaN (nothing there) is not nearer: the view votes
+            hidden = dr.gather(mi.Float64, device_image(depth, mi.Float64), index, ok) < (1.0 - tol) * at.distance(cam)
             ok &= hit | ~hidden
-        seen += ok
-        inside += hit
-    return (seen > 0) & (inside >= min_fraction * seen)
+        seen += dr.select(ok, 1, 0)
+        inside += dr.select(hit, 1, 0)
+        dr.eval(seen, inside)
+    return ((seen > 0) & (mi.Float64(inside) >= min_fraction * mi.Float64(seen))).numpy().astype(bool)
 
 
 def hull_behind_occluders(points, cameras, masks, dilation_px, min_fraction, depths, tol=0.05):
@@ -42,8 +45,9 @@ def hull_behind_occluders(points, cameras, masks, dilation_px, min_fraction, dep
     points out."""
     voted = visual_hull(points, cameras, masks, dilation_px, min_fraction, depths, tol)
     have = [k for k, d in enumerate(depths) if d is not None]
-    shown = seen_elsewhere(points, [cameras[k] for k in have], [depths[k] for k in have], [~masks[k] for k in have])
-    return voted & shown
+    voted[voted] = seen_elsewhere(np.asarray(points)[voted], [cameras[k] for k in have], [depths[k] for k in have],
+                                  [~masks[k] for k in have])  # per point: asked of the voted ones alone
+    return voted
 
 
 def check_hull(inputs, resolution=48):

@@ -6,9 +6,11 @@ nearer than X (relative tolerance ``tol``); it is *seen* (:func:`seen_elsewhere`
 also ends at X, on its surface. What some view sees is what the paper's masked loss can reconstruct; the rest
 needs a prior (:mod:`mi_voldis.fit.lift`).
 """
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 
-from ..cameras import pixel_of, pixel_rays
+from ..cameras import DevicePoints, device_image, pixel_of, pixel_rays
 from ..inpaint2d import fill_disparity
 from ..metrics import dilate
 
@@ -18,38 +20,44 @@ def in_view(points, cameras, depths, masks, tol=0.05):
     ``masks[j]``, with nothing nearer than (1 - ``tol``) times its distance in front of it there (its
     full-field depth map ``depths[j]``): points in front of surfaces and just inside them count; points
     behind an occluder do not."""
-    points = np.asarray(points, np.float64)
-    out = np.zeros(len(points), bool)
+    out = dr.zeros(mi.Bool, len(points))
+    if len(points) == 0:
+        return out.numpy().astype(bool)
+    at = DevicePoints(points)
     for cam, depth, mask in zip(cameras, depths, masks):
-        ix, iy, ok = pixel_of(cam, points)
-        ok[ok] &= ~mask[iy[ok], ix[ok]]
-        dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
-        ok[ok] &= ~(depth[iy[ok], ix[ok]] < (1.0 - tol) * dist[ok])  # NaN depth (nothing there): in view
+        index, ok = at.pixel_of(cam)
+        ok &= ~dr.gather(mi.Bool, device_image(mask, mi.Bool), index, ok)
+        # NaN depth (nothing there) is not nearer: in view
+        ok &= ~(dr.gather(mi.Float64, device_image(depth, mi.Float64), index, ok) < (1.0 - tol) * at.distance(cam))
         out |= ok
-    return out
+        dr.eval(out)
+    return out.numpy().astype(bool)
 
 
 def seen_elsewhere(points, cameras, depths, masks, images=None, tol=0.03):
     """Bool per world point (n, 3): seen unmasked by some camera of ``cameras``, given each camera's
     full-field depth map ``depths[j]`` (distance along its rays) and mask ``masks[j]``; with ``images``,
     also the mean colour of the pixels that see each point (n, 3) (NaN where none does)."""
-    points = np.asarray(points, np.float64)
-    seen = np.zeros(len(points), bool)
-    total = np.zeros((len(points), 3)) if images is not None else None
-    count = np.zeros(len(points))
-    for j, (cam, depth, mask) in enumerate(zip(cameras, depths, masks)):
-        ix, iy, ok = pixel_of(cam, points)
-        ok[ok] &= ~mask[iy[ok], ix[ok]]
-        dist = np.linalg.norm(points - cam.to_world[:3, 3], axis=1)
-        ok[ok] &= np.abs(depth[iy[ok], ix[ok]] - dist[ok]) <= tol * dist[ok]
+    seen, count = dr.zeros(mi.Bool, len(points)), dr.zeros(mi.Float64, len(points))
+    total = [dr.zeros(mi.Float64, len(points)) for _ in range(3)]
+    at = DevicePoints(points) if len(points) else None
+    for j, (cam, depth, mask) in enumerate(zip(cameras, depths, masks) if at is not None else ()):
+        index, ok = at.pixel_of(cam)
+        ok &= ~dr.gather(mi.Bool, device_image(mask, mi.Bool), index, ok)
+        dist = at.distance(cam)
+        ok &= dr.abs(dr.gather(mi.Float64, device_image(depth, mi.Float64), index, ok) - dist) <= tol * dist
         seen |= ok
         if images is not None:
-            total[ok] += images[j][iy[ok], ix[ok]]
-            count[ok] += 1
+            image = device_image(images[j], mi.Float64)
+            for c in range(3):
+                total[c] += dr.gather(mi.Float64, image, index * 3 + c, ok)
+            count += dr.select(ok, 1.0, 0.0)
+        dr.eval(seen, count, total)
+    seen = seen.numpy().astype(bool)
     if images is None:
         return seen
     with np.errstate(invalid="ignore", divide="ignore"):
-        return seen, total / count[:, None]
+        return seen, np.stack([t.numpy() for t in total], axis=1) / count.numpy()[:, None]
 
 
 def pixel_points(camera, depth, pixels):
