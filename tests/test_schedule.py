@@ -321,3 +321,33 @@ def test_the_default_plan_follows_the_backend(monkeypatch):
     # explicit values stay
     cfg = FitConfig().replace(batch_rays=1000, reference_msps=5.0, host_ms=0.0, max_memory_gib=2.0).for_backend("cuda")
     assert (cfg.batch_rays, cfg.reference_msps, cfg.host_ms, cfg.max_memory_gib) == (1000, 5.0, 0.0, 2.0)
+
+
+def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices_ask():
+    from types import SimpleNamespace
+
+    from mi_voldis.fit.schedule import memory_resolution, memory_scale, resolution_bounds
+    from mi_voldis.fit.train import cap_for_sh_degree
+    assert memory_scale(0) == memory_scale("auto") == 1.0 and memory_scale(1) == 4.0  # 16 floats a vertex, not 4
+    from mi_voldis.fit.schedule import BYTES_PER_SURFACE_CELL
+    cfg = FitConfig().for_backend("llvm")
+    cells = 2000.0  # at 64^3
+    r0, r1 = (memory_resolution(cfg, cells, 64, 64, d) for d in (0, 1))
+    bytes_at = lambda res, d: cells * (res / 64) ** 2 * BYTES_PER_SURFACE_CELL * memory_scale(d)  # noqa: E731
+    for r, d in ((r0, 0), (r1, 1)):
+        assert bytes_at(r, d) <= cfg.max_memory_gib * 2 ** 30 < bytes_at(r + 16, d)
+    assert 64 < r1 < r0
+    survey = dict(SURVEY, surface_cells=cells)
+    assert resolution_bounds(cfg.replace(sh_degree=1), StepCost(1e-6, 64), 1e6, survey, PIXELS)["memory"] == r1
+    # 'auto' picks degree 1 after a plan made at degree 0: the finer stages take the degree-1 bound
+    plan = {"surface_cells": cells, "surface_resolution": 64}
+    state = SimpleNamespace(plan=dict(plan), schedule=[[0, 64], [300, r1 + 32], [500, r0]])
+    cap_for_sh_degree(cfg, state, 1)
+    assert state.schedule == [[0, 64], [300, r1]] and state.plan["sh_memory_cap"] == r1
+    kept = [[0, 64], [300, r1]]
+    state = SimpleNamespace(plan=dict(plan), schedule=[list(s) for s in kept])
+    cap_for_sh_degree(cfg, state, 1)  # already within: unchanged, nothing recorded
+    assert state.schedule == kept and "sh_memory_cap" not in state.plan
+    state = SimpleNamespace(plan=dict(plan), schedule=[[0, 64], [500, r0]])
+    cap_for_sh_degree(cfg.replace(resolution=r0), state, 1)  # a resolution the user gave stays
+    assert state.schedule == [[0, 64], [500, r0]]

@@ -191,6 +191,25 @@ def stages(cfg, coarse, final):
 BYTES_PER_SURFACE_CELL = 150 * 580
 
 
+def memory_scale(sh_degree):
+    """How much more a fit's memory per surface cell holds at colour ``sh_degree`` (0, 1 or 'auto', which
+    starts at 0) than BYTES_PER_SURFACE_CELL, measured at degree 0: its packed floats per vertex over degree
+    0's (4; degree 1: 16). Measured on fern: 7.0 GiB of peak RSS at degree 1 and 336^3 against 1.7 GiB at
+    degree 0 and 304^3, 3.3 times as much per vertex (reports/notes.md)."""
+    from ..grid import packet_width
+    degree = 0 if sh_degree == "auto" else int(sh_degree)
+    return packet_width(1 + 3 * (degree + 1) ** 2) / packet_width(4)
+
+
+def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree):
+    """The finest resolution (a multiple of 16, at least ``coarse``) whose estimated peak memory,
+    ``surface_cells`` (R / surface_resolution)^2 cells of BYTES_PER_SURFACE_CELL memory_scale(sh_degree)
+    bytes, stays within ``max_memory_gib``."""
+    cells = surface_cells * (coarse / surface_resolution) ** 2  # at the coarse resolution
+    limit = (cfg.max_memory_gib * 2 ** 30 / (BYTES_PER_SURFACE_CELL * memory_scale(sh_degree)) / cells) ** 0.5
+    return int(max(coarse, 16 * np.floor(coarse * limit / 16)))
+
+
 def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
     """The finest resolution R (a multiple of 16, at least the coarse one, ``cost.resolution``) each rule
     allows: {"observations": R whose last stage (its share of the budget, stage_starts[-1] to the end)
@@ -198,13 +217,14 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
     ``cost.at(R)`` (:class:`StepCost`) and surfaces holding ``surface_cells`` (R / surface_resolution)^2
     cells (``survey``: :func:`capture_survey`); "pixels": R whose surface cells are no more than the
     ``pixels`` training pixels that end on them over ``pixels_per_voxel``^2 (a cell no pixel ends in has
-    nothing to fit); "memory": R whose estimated peak memory stays within ``max_memory_gib``}. Rays, not
+    nothing to fit); "memory": R whose estimated peak memory stays within ``max_memory_gib``
+(:func:`memory_resolution`, at the colour degree ``sh_degree`` asks)}. Rays, not
     passes over the pixels, are the currency: a capture with more views buys the same grid or a finer one.
 
         steps(R) = share budget / cost(R),   rays(R) = steps(R) batch hits
         rays(R) / (cells (R / R_s)^2) >= min_observations
         cells (R / R_s)^2 <= pixels hits / pixels_per_voxel^2
-        cells (R / R_s)^2 BYTES_PER_SURFACE_CELL <= max_memory_gib
+        cells (R / R_s)^2 BYTES_PER_SURFACE_CELL memory_scale(sh_degree) <= max_memory_gib
     """
     coarse = cost.resolution
     share = 1.0 - (cfg.stage_starts[-1] if cfg.stage_starts else 0.0)
@@ -217,7 +237,8 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
         return int(max(coarse, 16 * np.floor(coarse * limit / 16)))
     return {"observations": int(grid[seen].max()) if seen.any() else int(coarse),
             "pixels": finest((pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5),
-            "memory": finest((cfg.max_memory_gib * 2 ** 30 / BYTES_PER_SURFACE_CELL / cells) ** 0.5)}
+            "memory": memory_resolution(cfg, survey["surface_cells"], survey["surface_resolution"], coarse,
+                                        cfg.sh_degree)}
 
 
 def affordable_resolution(cfg, cost, budget_seconds, survey, pixels):

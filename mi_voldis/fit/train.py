@@ -75,6 +75,7 @@ from .schedule import (
     backend,
     capture_survey,
     coarse_resolution,
+    memory_resolution,
     rescale,
     resolution_bounds,
     schedule_of,
@@ -236,7 +237,8 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
         optimize(problem, state.adam, steps=sh_step, start=start,
                  final_ratio=cfg.lr_final_ratio ** (sh_step / state.steps_full), desc="full (coarse)", **common)
         problem.sync_states()
-        choose_sh_degree(inputs, state, roles)
+        if choose_sh_degree(inputs, state, roles):
+            cap_for_sh_degree(cfg, state, 1)
         state.adam.reset()
         problem.rebuild()
         start = sh_step
@@ -244,6 +246,24 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
              desc="full" if not scratch else "full + bg", **common)
     problem.sync_states()
     state.phase_times["full"] = state.phase_times.get("full", 0.0) + time.perf_counter() - t0
+
+
+def cap_for_sh_degree(cfg, state, degree):
+    """Degree-1 colour chosen after the plan (``sh_degree`` 'auto'), which was bounded in memory at
+    degree 0: stages finer than the memory bound at ``degree`` (:func:`memory_resolution`) take that
+    bound instead, a stage that would repeat the one before it is dropped, and the plan records the cap."""
+    plan = state.plan or {}
+    if cfg.resolution != "auto" or "surface_cells" not in plan:
+        return
+    cap = memory_resolution(cfg, plan["surface_cells"], plan["surface_resolution"], state.schedule[0][1], degree)
+    if all(r <= cap for _, r in state.schedule):
+        return
+    capped = []
+    for start, r in state.schedule:
+        if not capped or min(r, cap) != capped[-1][1]:
+            capped.append([start, min(r, cap)])
+    state.schedule = capped
+    plan["sh_memory_cap"] = cap
 
 
 def replan(state, step):
