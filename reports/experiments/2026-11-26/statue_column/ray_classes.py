@@ -2,29 +2,21 @@
 surface, and seen unmasked.
 """
 
-import json
 import sys
 
 import numpy as np
+from kept_run import open_run
 
 import mi_voldis  # noqa
 from mi_voldis.bench.strategies import refit_config
 from mi_voldis.cameras import pixel_rays
-from mi_voldis.data import load_dataset
-from mi_voldis.fit.fields import FitInputs
 from mi_voldis.fit.lift import training_depths
-from mi_voldis.fit.state import FitState
 from mi_voldis.fit.visibility import hidden_surface_side, in_view
 from mi_voldis.inpaint2d import fill_disparity
 from mi_voldis.metrics import dilate
-from mi_voldis.optim.adam import Adam
 
 run = sys.argv[1]
-cfg = refit_config(run, "guided")
-rec = json.load(open(run + "/config.json"))["dataset"]
-ds = load_dataset(rec["path"], rec["format"], rec["holdout"])
-state = FitState.load(run + "/checkpoints/last.npz", Adam({}, 0.9, 0.99))
-inputs = FitInputs.of(ds, cfg, "/tmp/s46/diag_state.npz", True)
+cfg, ds, state, inputs = open_run(run, refit_config(run, "guided"))
 depth = training_depths(inputs, state, median=True)
 views = [u for u in depth if u in set(int(x) for x in ds.masked_train)]
 diag = np.hypot(*ds.size)

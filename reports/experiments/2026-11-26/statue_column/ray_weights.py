@@ -1,31 +1,21 @@
 """Where the full field's and the background's weights lie along four rays through the mask of held-out view V."""
 
-import json
 import sys
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+from kept_run import run_integrator
 
 import mi_voldis  # noqa
 from mi_voldis.cameras import pixel_rays
-from mi_voldis.data import load_dataset
 from mi_voldis.device import from_numpy
-from mi_voldis.fit.config import FitConfig
-from mi_voldis.fit.fields import FitInputs, fit_integrator
-from mi_voldis.fit.state import FitState
-from mi_voldis.optim.adam import Adam
 from mi_voldis.render import march
 from mi_voldis.render.surface import median_depth
 
 run = sys.argv[1]
 v = int(sys.argv[2])
-cfg = FitConfig.from_sources(run + "/config.json", [])
-rec = json.load(open(run + "/config.json"))["dataset"]
-ds = load_dataset(rec["path"], rec["format"], rec["holdout"])
-state = FitState.load(run + "/checkpoints/last.npz", Adam({}, 0.9, 0.99))
-inputs = FitInputs.of(ds, cfg, "/tmp/s46/diag_state.npz", True)
-integ = fit_integrator(inputs, state)
+ds, integ = run_integrator(run)
 cam = ds.cameras[v]
 m = ds.masks[v]
 ys, xs = np.nonzero(m)

@@ -2,26 +2,22 @@
 final state kept in OUT/checkpoints.
 """
 
-import json
 import os
 import shutil
 import sys
 
+from kept_run import open_run
+
 import mi_voldis  # noqa
 from mi_voldis.bench.strategies import refit_config
-from mi_voldis.data import load_dataset
-from mi_voldis.fit.state import FitState
 from mi_voldis.fit.train import fit
-from mi_voldis.optim.adam import Adam
 
 run, out = sys.argv[1], sys.argv[2]
 sets = sys.argv[3:]
 if os.path.exists(out):
     raise SystemExit(f"error: {out} exists (give a new folder)")
 cfg = refit_config(run, "guided", sets)
-rec = json.load(open(run + "/config.json"))["dataset"]
-ds = load_dataset(rec["path"], rec["format"], rec["holdout"])
-state = FitState.load(run + "/checkpoints/last.npz", Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup))
+cfg, ds, state, _ = open_run(run, cfg)
 state.fields.pop("bg", None)
 state.hull_points = state.prior = state.prior_keys = state.occupancy = None
 state.adam.reset()

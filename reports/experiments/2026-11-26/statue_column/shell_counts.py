@@ -1,26 +1,19 @@
 """hole_carve on RUN: bricks before / after allocation, and the vertices carved and made solid."""
 
-import json
 import sys
 
 import numpy as np
+from kept_run import open_run
 
 import mi_voldis  # noqa
 from mi_voldis.bench.strategies import refit_config
-from mi_voldis.data import load_dataset
 from mi_voldis.fit import background as B
-from mi_voldis.fit.fields import FitInputs
 from mi_voldis.fit.lift import training_depths
-from mi_voldis.fit.state import FitState
-from mi_voldis.optim.adam import Adam
 
 run = sys.argv[1]
-cfg = refit_config(run, "guided")
+cfg = refit_config(run, "guided", ["hole_carve=true"] + sys.argv[2:])  # the carving it counts (off by default)
 print("hole_carve", cfg.hole_carve, cfg.hole_carve_behind)
-rec = json.load(open(run + "/config.json"))["dataset"]
-ds = load_dataset(rec["path"], rec["format"], rec["holdout"])
-state = FitState.load(run + "/checkpoints/last.npz", Adam({}, 0.9, 0.99))
-inputs = FitInputs.of(ds, cfg, "/tmp/s46/diag_state.npz", True)
+cfg, ds, state, inputs = open_run(run, cfg)
 before = int((state.fields["full"].layout.table > 0).sum())
 depth = training_depths(inputs, state, median=True)
 state.fields["full"] = B.allocate_hidden_surface(inputs, state, depth)
