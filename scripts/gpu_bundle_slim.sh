@@ -15,7 +15,8 @@ OUT=${2:-.gpu-slim/site312.tar.xz}
 [ -f "$BUNDLE" ] || { echo "gpu_bundle_slim: no bundle at $BUNDLE (make it with ../shared/tools/gpu_bundle.sh)" >&2; exit 1; }
 [ ! -e "$OUT" ] || { echo "gpu_bundle_slim: $OUT is already there: remove it first to make it again" >&2; exit 1; }
 WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
+PACKED=$(mktemp)
+trap 'rm -rf "$WORK" "$PACKED"' EXIT
 tar -C "$WORK" -xJf "$BUNDLE"
 [ -d "$WORK/mitsuba/plugins" ] || { echo "gpu_bundle_slim: $BUNDLE holds no mitsuba/plugins" >&2; exit 1; }
 rm -rf "$WORK/drjit/include" "$WORK/mitsuba/data/srgb.coeff" "$WORK/mitsuba/data/sunsky"
@@ -32,6 +33,6 @@ if [ -n "$INSIDE" ] && git rev-parse --git-dir > /dev/null 2>&1; then
     mkdir -p "$(dirname "$EXCLUDE")"
     grep -qx "/${DIR#./}/" "$EXCLUDE" 2>/dev/null || echo "/${DIR#./}/" >> "$EXCLUDE"
 fi
-tar -C "$WORK" -cf - . | xz -9e -T2 > "$WORK.xz"
-mv "$WORK.xz" "$OUT"
+tar -C "$WORK" -cf - . | xz -9e -T2 > "$PACKED"
+mv "$PACKED" "$OUT"
 du -h "$OUT"
