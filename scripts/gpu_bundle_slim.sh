@@ -34,5 +34,5 @@ if [ -n "$INSIDE" ] && git rev-parse --git-dir > /dev/null 2>&1; then
     grep -qx "/${DIR#./}/" "$EXCLUDE" 2>/dev/null || echo "/${DIR#./}/" >> "$EXCLUDE"
 fi
 tar -C "$WORK" -cf - . | xz -9e -T2 > "$PACKED"
-mv "$PACKED" "$OUT"
+mv "$PACKED" "$OUT" && chmod 644 "$OUT"  # mktemp made it private
 du -h "$OUT"
