@@ -1012,3 +1012,4 @@ def test_the_hull_and_visibility_kernels_answer_as_numpy_does_view_by_view():
         count[ok] += 1
     np.testing.assert_allclose(colour[seen], total[seen] / count[seen, None], rtol=1e-12)
     assert len(visual_hull(points[:0], cams, masks, 0, 0.9)) == 0 == len(in_view(points[:0], cams, depths, masks))
+    assert [a.shape for a in seen_elsewhere(points[:0], cams, depths, masks, images)] == [(0,), (0, 3)]

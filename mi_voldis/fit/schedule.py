@@ -206,8 +206,13 @@ def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree)
     ``surface_cells`` (R / surface_resolution)^2 cells of BYTES_PER_SURFACE_CELL memory_scale(sh_degree)
     bytes, stays within ``max_memory_gib``."""
     cells = surface_cells * (coarse / surface_resolution) ** 2  # at the coarse resolution
-    limit = (cfg.max_memory_gib * 2 ** 30 / (BYTES_PER_SURFACE_CELL * memory_scale(sh_degree)) / cells) ** 0.5
-    return int(max(coarse, 16 * np.floor(coarse * limit / 16)))
+    return _finest(coarse, (cfg.max_memory_gib * 2 ** 30 / (BYTES_PER_SURFACE_CELL * memory_scale(sh_degree))
+                            / cells) ** 0.5)
+
+
+def _finest(coarse, ratio):
+    """The largest multiple of 16 at most ``coarse`` * ``ratio``, and at least ``coarse``."""
+    return int(max(coarse, 16 * np.floor(coarse * ratio / 16)))
 
 
 def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
@@ -218,8 +223,8 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
     cells (``survey``: :func:`capture_survey`); "pixels": R whose surface cells are no more than the
     ``pixels`` training pixels that end on them over ``pixels_per_voxel``^2 (a cell no pixel ends in has
     nothing to fit); "memory": R whose estimated peak memory stays within ``max_memory_gib``
-(:func:`memory_resolution`, at the colour degree ``sh_degree`` asks)}. Rays, not
-    passes over the pixels, are the currency: a capture with more views buys the same grid or a finer one.
+    (:func:`memory_resolution`, at the colour degree ``sh_degree`` asks)}. Rays, not passes over the
+    pixels, are the currency: a capture with more views buys the same grid or a finer one.
 
         steps(R) = share budget / cost(R),   rays(R) = steps(R) batch hits
         rays(R) / (cells (R / R_s)^2) >= min_observations
@@ -232,11 +237,8 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
     grid = np.arange(16 * -(-coarse // 16), max(cfg.max_resolution, coarse) + 1, 16, dtype=np.float64)
     rays = share * budget_seconds / cost.at(grid) * cfg.batch_rays * survey["ray_hits"]
     seen = rays >= cells * (grid / coarse) ** 2 * cfg.min_observations  # fewer as R grows: the finest is the bound
-
-    def finest(limit):  # multiple of 16 at most coarse * limit, at least coarse
-        return int(max(coarse, 16 * np.floor(coarse * limit / 16)))
     return {"observations": int(grid[seen].max()) if seen.any() else int(coarse),
-            "pixels": finest((pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5),
+            "pixels": _finest(coarse, (pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5),
             "memory": memory_resolution(cfg, survey["surface_cells"], survey["surface_resolution"], coarse,
                                         cfg.sh_degree)}
 

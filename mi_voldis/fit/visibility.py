@@ -20,10 +20,9 @@ def in_view(points, cameras, depths, masks, tol=0.05):
     ``masks[j]``, with nothing nearer than (1 - ``tol``) times its distance in front of it there (its
     full-field depth map ``depths[j]``): points in front of surfaces and just inside them count; points
     behind an occluder do not."""
-    out = dr.zeros(mi.Bool, len(points))
     if len(points) == 0:
-        return out.numpy().astype(bool)
-    at = DevicePoints(points)
+        return np.zeros(0, bool)
+    out, at = dr.zeros(mi.Bool, len(points)), DevicePoints(points)
     for cam, depth, mask in zip(cameras, depths, masks):
         index, ok = at.pixel_of(cam)
         ok &= ~dr.gather(mi.Bool, device_image(mask, mi.Bool), index, ok)
@@ -38,10 +37,12 @@ def seen_elsewhere(points, cameras, depths, masks, images=None, tol=0.03):
     """Bool per world point (n, 3): seen unmasked by some camera of ``cameras``, given each camera's
     full-field depth map ``depths[j]`` (distance along its rays) and mask ``masks[j]``; with ``images``,
     also the mean colour of the pixels that see each point (n, 3) (NaN where none does)."""
+    if len(points) == 0:
+        return np.zeros(0, bool) if images is None else (np.zeros(0, bool), np.zeros((0, 3)))
     seen, count = dr.zeros(mi.Bool, len(points)), dr.zeros(mi.Float64, len(points))
     total = [dr.zeros(mi.Float64, len(points)) for _ in range(3)]
-    at = DevicePoints(points) if len(points) else None
-    for j, (cam, depth, mask) in enumerate(zip(cameras, depths, masks) if at is not None else ()):
+    at = DevicePoints(points)
+    for j, (cam, depth, mask) in enumerate(zip(cameras, depths, masks)):
         index, ok = at.pixel_of(cam)
         ok &= ~dr.gather(mi.Bool, device_image(mask, mi.Bool), index, ok)
         dist = at.distance(cam)
