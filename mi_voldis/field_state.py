@@ -152,6 +152,13 @@ def resample(state, shape=None, keep=None):
     return new
 
 
+def resampled_vertices(state, shape, keep=None):
+    """Stored vertices (the empty brick's included) of :func:`resample` (``state``, ``shape``, ``keep``),
+    counted without allocating them."""
+    keep = state.layout.table > 0 if keep is None else keep
+    return (int(_bricks_over(keep, state.layout, tuple(shape)).sum()) + 1) * state.layout.vertices_per_brick
+
+
 def _bricks_over(keep, old, shape):
     """Bricks of a lattice of ``shape`` vertices over the same box whose box overlaps a ``keep`` brick of
     the ``old`` layout."""

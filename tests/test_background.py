@@ -65,6 +65,16 @@ def test_harmonic_fill_reproduces_affine_data_and_stays_within_its_boundary():
     assert out[hole].max() <= noisy[ring].max() + 1e-9 and out[hole].min() >= noisy[ring].min() - 1e-9
 
 
+def test_the_volumetric_harmonic_fill_of_an_empty_region_changes_nothing():
+    """A hull no vertex of the grid lies in (a grid kept coarse): the fill returns the values as they are."""
+    from mi_voldis.field_state import neighbour_vertices
+    from mi_voldis.fit.background import harmonic_fill as fill3d
+    field = new_field(np.zeros(3), np.ones(3), 8, 0, -3.0, 1.0, 4)
+    values = field.data + dr.arange(mi.Float, dr.width(field.data))
+    out = fill3d(values, field.width, dr.zeros(mi.Float, field.vertices), neighbour_vertices(field))
+    np.testing.assert_array_equal(np.array(out), np.array(values))
+
+
 def test_inpainters_are_named_or_callable():
     image = np.random.default_rng(1).uniform(0, 1, (20, 24, 3)).astype(np.float32)
     hole = np.zeros((20, 24), bool)

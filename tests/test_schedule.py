@@ -69,13 +69,56 @@ def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_
         SURVEY["surface_cells"] * ((few + 16) / 64) ** 2
 
 
+def memory_at(res, cells=SURVEY["surface_cells"], pixels=PIXELS, background=False, degree=0):
+    """The plan's estimate of a fit's peak bytes at ``res``, written out from its constants."""
+    from mi_voldis.fit.schedule import BASE_BYTES, BYTES_PER_PIXEL, BYTES_PER_VERTEX, VERTICES_PER_SURFACE_CELL
+    vertices = cells * (res / 64) ** 2 * VERTICES_PER_SURFACE_CELL
+    per_vertex = BYTES_PER_VERTEX[background] * (4.0 if degree == 1 else 1.0)
+    return BASE_BYTES + BYTES_PER_PIXEL * pixels + vertices * per_vertex
+
+
 def test_affordable_resolution_keeps_the_estimated_memory_within_max_memory_gib():
-    from mi_voldis.fit.schedule import BYTES_PER_SURFACE_CELL
     cfg = FitConfig().for_backend("llvm")
     r = affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, PIXELS)  # time and pixels buy any grid
-    bytes_at = lambda res: SURVEY["surface_cells"] * (res / 64) ** 2 * BYTES_PER_SURFACE_CELL  # noqa: E731
-    assert bytes_at(r) <= cfg.max_memory_gib * 2 ** 30 < bytes_at(r + 16)
-    assert affordable_resolution(cfg.replace(max_memory_gib=16.0), StepCost(1e-6, 64), 1e6, SURVEY, PIXELS) == 2 * r
+    assert memory_at(r) <= cfg.max_memory_gib * 2 ** 30 < memory_at(r + 16)
+    # a background refit keeps both fields: a coarser grid; more memory: a finer one
+    rb = affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, PIXELS, background=True)
+    assert memory_at(rb, background=True) <= cfg.max_memory_gib * 2 ** 30 < memory_at(rb + 16, background=True)
+    assert rb < r < affordable_resolution(cfg.replace(max_memory_gib=16.0), StepCost(1e-6, 64), 1e6, SURVEY, PIXELS)
+    # the photos' share comes first: a capture whose pixels fill the memory gets the coarse grid
+    assert affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, 2 ** 32 // 30) == 64
+
+
+def test_a_stage_stops_short_of_the_memory_bound_on_its_counted_vertices():
+    """fitting_resolution: the finest resolution (the planned one, or the current plus a multiple of 16)
+    whose carved, resampled lattices hold at most the given vertices, counted without allocating them
+    (the count equals what resampling allocates); the current resolution where none fits."""
+    from types import SimpleNamespace
+
+    from mi_voldis.field_state import new_field, resample, resampled_vertices, shape_for
+    from mi_voldis.fit.fields import fitting_resolution
+    lo, hi = np.zeros(3), np.array([1.0, 0.5, 1.0])
+    field = new_field(lo, hi, 40, 0, -3.0, 1.0, 8)
+    keep = np.zeros(field.layout.table.shape, bool)
+    keep[0, :, :] = True  # a sheet of bricks: vertices grow with R^2
+    state = SimpleNamespace(fields={"full": field, "bg": field}, lo=lo, hi=hi)
+    count = lambda res: resampled_vertices(field, shape_for(lo, hi, res), keep)  # noqa: E731
+    assert count(88) == resample(field, shape_for(lo, hi, 88), keep).vertices
+    assert fitting_resolution(state, {"full": keep}, 200, count(200)) == 200  # fits: unchanged
+    for limit in (count(88), count(88) + 1, count(104) - 1):
+        got = fitting_resolution(state, {"full": keep}, 200, limit)
+        assert (got - 40) % 16 == 0 and count(got) <= limit < count(got + 16), limit
+    assert fitting_resolution(state, {"full": keep}, 200, 1) == 40  # nothing finer fits: stay
+    assert fitting_resolution(state, {"full": keep, "bg": None}, 200, count(200) + 1) < 200  # fields add up
+
+
+def test_capped_schedules_keep_earlier_stages_and_drop_repeats():
+    from mi_voldis.fit.schedule import capped
+    schedule = [[0, 64], [100, 128], [200, 256], [300, 512]]
+    assert capped(schedule, 200, 200) == [[0, 64], [100, 128], [200, 200]]
+    assert capped(schedule, 128, 200) == [[0, 64], [100, 128]]
+    assert capped(schedule, 100, 0) == [[0, 64], [100, 100]]
+    assert capped(schedule, 1024, 0) == schedule
 
 
 def test_surface_cells_is_the_effective_number_of_cells_rays_end_in():
@@ -178,6 +221,28 @@ def test_a_budgeted_fit_plans_from_the_capture_and_reports_its_plan(tiny_dataset
     assert np.isfinite(metrics["held_out"]["psnr"])
 
 
+def test_a_fit_whose_carved_grid_would_outgrow_the_memory_stays_on_the_grid_it_has(tiny_dataset, tmp_path,
+                                                                                      monkeypatch):
+    """With no memory for a single vertex more, every later stage is capped at the coarse grid: the run
+    ends on it and its plan records each cap as [step, planned, used]."""
+    from mi_voldis.field_state import shape_for
+    from mi_voldis.fit import fields
+    from mi_voldis.fit.run import run_fit
+    monkeypatch.setattr(fields, "affordable_vertices", lambda *a: 1.0)
+    sets = ["steps_full=90", "calibration_steps=40", "lr_density=0.5", "density_init_alpha=0.05", "coarse_resolution=8",
+            "batch_rays=512", "steps_bg=2", "sh_degree=0", "eval_every=1000", "occupancy_at_step=10", "stages=3",
+            "stage_starts=[0.4,0.7]"]
+    out = str(tmp_path / "run")
+    run_fit(tiny_dataset, out, FitConfig.from_sources(None, sets), progress=False)
+    metrics = json.load(open(os.path.join(out, "metrics.json")))
+    plan = metrics["schedule"]["plan"]
+    assert plan["final_resolution"] > 8 and metrics["schedule"]["stages"] == [[0, 8]]
+    assert plan["surface_cells"] > 0  # the plan chose the grid: the bound applies
+    assert [c[2] for c in plan["memory_caps"]] == [8] and plan["memory_caps"][0][1] > 8
+    box = metrics["box"]
+    assert tuple(metrics["grid"]["full"]) == shape_for(np.array(box["lo"]), np.array(box["hi"]), 8)
+
+
 @pytest.mark.parametrize("steps", [5, 17])
 def test_the_optimisation_loop_follows_an_end_that_moves(steps):
     import mitsuba as mi
@@ -217,7 +282,7 @@ def planned(cfg, state):
     from types import SimpleNamespace
 
     from mi_voldis.fit.train import plan_schedule
-    ds = SimpleNamespace(train=list(range(4)), size=(100, 100))  # 0.04 Mpx: the 1.5-minute floor
+    ds = SimpleNamespace(train=list(range(4)), size=(100, 100), masks=None)  # 0.04 Mpx: the 1.5-minute floor
     plan_schedule(SimpleNamespace(cfg=cfg, ds=ds, bank=SimpleNamespace(pixels=4 * 100 * 100)), state, None)
     return state
 
@@ -329,25 +394,26 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     from mi_voldis.fit.schedule import memory_resolution, memory_scale, resolution_bounds
     from mi_voldis.fit.train import cap_for_sh_degree
     assert memory_scale(0) == memory_scale("auto") == 1.0 and memory_scale(1) == 4.0  # 16 floats a vertex, not 4
-    from mi_voldis.fit.schedule import BYTES_PER_SURFACE_CELL
     cfg = FitConfig().for_backend("llvm")
     cells = 2000.0  # at 64^3
-    r0, r1 = (memory_resolution(cfg, cells, 64, 64, d) for d in (0, 1))
-    bytes_at = lambda res, d: cells * (res / 64) ** 2 * BYTES_PER_SURFACE_CELL * memory_scale(d)  # noqa: E731
+    r0, r1 = (memory_resolution(cfg, cells, 64, 64, d, PIXELS, False) for d in (0, 1))
     for r, d in ((r0, 0), (r1, 1)):
-        assert bytes_at(r, d) <= cfg.max_memory_gib * 2 ** 30 < bytes_at(r + 16, d)
+        assert memory_at(r, cells, degree=d) <= cfg.max_memory_gib * 2 ** 30 < memory_at(r + 16, cells, degree=d)
     assert 64 < r1 < r0
     survey = dict(SURVEY, surface_cells=cells)
     assert resolution_bounds(cfg.replace(sh_degree=1), StepCost(1e-6, 64), 1e6, survey, PIXELS)["memory"] == r1
     # 'auto' picks degree 1 after a plan made at degree 0: the finer stages take the degree-1 bound
     plan = {"surface_cells": cells, "surface_resolution": 64}
+
+    def inputs(c):
+        return SimpleNamespace(cfg=c, bank=SimpleNamespace(pixels=PIXELS), ds=SimpleNamespace(masks=None))
     state = SimpleNamespace(plan=dict(plan), schedule=[[0, 64], [300, r1 + 32], [500, r0]])
-    cap_for_sh_degree(cfg, state, 1)
+    cap_for_sh_degree(inputs(cfg), state, 1)
     assert state.schedule == [[0, 64], [300, r1]] and state.plan["sh_memory_cap"] == r1
     kept = [[0, 64], [300, r1]]
     state = SimpleNamespace(plan=dict(plan), schedule=[list(s) for s in kept])
-    cap_for_sh_degree(cfg, state, 1)  # already within: unchanged, nothing recorded
+    cap_for_sh_degree(inputs(cfg), state, 1)  # already within: unchanged, nothing recorded
     assert state.schedule == kept and "sh_memory_cap" not in state.plan
     state = SimpleNamespace(plan=dict(plan), schedule=[[0, 64], [500, r0]])
-    cap_for_sh_degree(cfg.replace(resolution=r0), state, 1)  # a resolution the user gave stays
+    cap_for_sh_degree(inputs(cfg.replace(resolution=r0)), state, 1)  # a resolution the user gave stays
     assert state.schedule == [[0, 64], [500, r0]]

@@ -324,6 +324,8 @@ def harmonic_fill(values, width, region, neighbours, iterations=300):
     i = dr.arange(mi.UInt32, n)
     fill = dr.compress(dr.gather(mi.Float, region, i // width) > 0)  # packed indices to fill
     m = dr.width(fill)
+    if m == 0:  # nothing to fill (a hull too thin for any vertex of the grid)
+        return dr.copy(values)
     compact = dr.full(mi.UInt32, m, n)  # packed index -> its place in the fill set (m: not in it)
     dr.scatter(compact, dr.arange(mi.UInt32, m), fill)
     vertex, channel = fill // width, fill % width

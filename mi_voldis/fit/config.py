@@ -93,10 +93,12 @@ class FitConfig(Settings):
                                             "many training rays in every cell where rays end (surfaces): a grid "
                                             "seen too few times is worse than a coarser one seen often",
                                       above=0)
-    max_memory_gib: float | str = setting("auto", "with resolution 'auto', the fit's peak memory is estimated from "
-                                                  "the final grid's surface cells (mi_voldis.fit.schedule."
-                                                  "BYTES_PER_SURFACE_CELL) to stay within this many GiB ('auto': "
-                                                  "the backend's, 4 of RAM on llvm, 32 of the GPU's on cuda)",
+    max_memory_gib: float | str = setting("auto", "with resolution 'auto', the fit's peak memory stays within this "
+                                                  "many GiB ('auto': the backend's, 4 of RAM on llvm, 32 of the "
+                                                  "GPU's on cuda): the plan estimates it from the surface cells, "
+                                                  "each stage counts its carved vertices before allocating them and "
+                                                  "stops short of the bound (mi_voldis.fit.schedule."
+                                                  "affordable_vertices; metrics.json: schedule.plan.memory_caps)",
                                           check=_auto_or(False, above=0))
     coarse_resolution: int = setting(64, "resolution of the first stage", low=4)
     stages: int = setting(4, "coarse-to-fine stages, each doubling the resolution", low=1, high=8)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..data.scene_box import fitting_box
 from ..data.types import Dataset
-from ..field_state import carve, density_raw_for_alpha, new_field, resample, shape_for, voxel_size
+from ..field_state import carve, density_raw_for_alpha, new_field, resample, resampled_vertices, shape_for, voxel_size
 from ..fieldspec import constant_field
 from ..raybank import RayBank
 from ..render import march
@@ -17,7 +17,7 @@ from ..scene import build_integrator, integrator_properties
 from ..space import SceneBox, SceneSpace
 from ..transforms import apply_point
 from .config import FitConfig
-from .schedule import coarse_resolution, finest_resolution
+from .schedule import affordable_vertices, coarse_resolution, finest_resolution
 
 
 @dataclass(frozen=True)
@@ -57,20 +57,69 @@ def init_fields(inputs, state, roles, sh_degree):
         state.fields[r] = new_field(state.lo, state.hi, res, sh_degree, raw, scale, cfg.brick)
 
 
-def refine(inputs, state, integrator, roles, resolution):
+def refine(inputs, state, integrator, roles, resolution, max_vertices=None):
     """Carve the fields of ``roles`` to the bricks where training rays end (some sample of some ray gets
     weight ``carve_weight``; grown by a brick) and resample them onto a lattice of ``resolution``
-    vertices along the box's longest side."""
+    vertices along the box's longest side, or with ``max_vertices`` the finest one (in steps of 16, not
+    below the current lattice) whose carved fields hold no more stored vertices together
+    (:func:`fitting_resolution`). Returns the resolution used."""
+    keeps = {}
     for r in roles:
         f = state.fields[r]
         if not inputs.cfg.carve:
-            state.fields[r] = resample(f, shape_for(state.lo, state.hi, resolution))
+            keeps[r] = None
             continue
         weights = ray_weights(inputs, integrator, r)
         needed = weights > inputs.cfg.carve_weight
         if not needed.any():  # a field still nearly transparent everywhere: keep its strongest bricks
             needed = weights >= 0.5 * weights.max() if weights.max() > 0 else np.ones(weights.shape, bool)
-        state.fields[r] = resample(f, shape_for(state.lo, state.hi, resolution), carve(f, needed))
+        keeps[r] = carve(f, needed)
+    if max_vertices is not None:
+        resolution = fitting_resolution(state, keeps, resolution, max_vertices)
+    for r in roles:
+        state.fields[r] = resample(state.fields[r], shape_for(state.lo, state.hi, resolution), keeps[r])
+    dr.flush_malloc_cache()  # the coarser lattice's arrays, cached by Dr.Jit's allocator, are of no use now
+    return resolution
+
+
+def fitting_resolution(state, keeps, resolution, max_vertices):
+    """The finest resolution R <= ``resolution`` (``resolution`` itself, or the current lattice's plus a
+    multiple of 16) at which the fields of ``keeps`` (role -> carved bricks, None: all allocated),
+    resampled, hold at most ``max_vertices`` stored vertices together; the current resolution where none
+    does. Bisection: the count grows with R."""
+    current = max(max(state.fields[r].shape) for r in keeps)
+
+    def vertices(res):
+        return sum(resampled_vertices(state.fields[r], shape_for(state.lo, state.hi, res), keep)
+                   for r, keep in keeps.items())
+
+    if resolution <= current or vertices(resolution) <= max_vertices:
+        return resolution
+    lo, hi = 0, (resolution - current - 1) // 16  # candidates current + 16 k, k in [1, hi]; lo: fits
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if vertices(current + 16 * mid) <= max_vertices:
+            lo = mid
+        else:
+            hi = mid - 1
+    return current + 16 * lo
+
+
+def memory_bound(inputs, state):
+    """The most stored vertices the fields being fitted may hold (:func:`~mi_voldis.fit.schedule.
+    affordable_vertices`) where the plan chose the resolution (``resolution`` 'auto'), else None."""
+    cfg = inputs.cfg
+    if cfg.resolution != "auto" or cfg.resolution_schedule or not (state.plan or {}).get("surface_cells"):
+        return None
+    channels = max(f.channels for f in state.fields.values())
+    degree = 0 if channels <= 4 else 1
+    return affordable_vertices(cfg, inputs.bank.pixels, degree, refits_background(inputs))
+
+
+def refits_background(inputs):
+    """Whether a background is refitted after the full field (masks given, ``bg_strategy`` not 'scratch'):
+    both fields then live at once."""
+    return inputs.ds.masks is not None and inputs.cfg.bg_strategy != "scratch"
 
 
 def ray_weights(inputs, integrator, role):

@@ -1,5 +1,7 @@
 """One fitting phase as a problem for :func:`mi_voldis.optim.loop.optimize`: which fields, which
 layers, which rays, the paper's losses on them and the regularisers."""
+import sys
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -11,8 +13,8 @@ from ..losses import background_loss, distortion_loss, full_loss
 from ..optim.parameters import PackedParameters
 from ..regularizers import sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
-from .fields import fit_integrator, occupancy_resolution, occupancy_sigma, refine
-from .schedule import REPLAN_EVERY, resolution_at
+from .fields import fit_integrator, memory_bound, occupancy_resolution, occupancy_sigma, refine
+from .schedule import REPLAN_EVERY, capped, resolution_at
 
 
 def backdrop(ds, rng, n):
@@ -89,7 +91,14 @@ class FieldFit:
             self.on_stage(step)
         if upsample:
             self.sync_states()
-            refine(self.inputs, state, self.integrator, self.roles, resolution_at(state.schedule, step))
+            planned = resolution_at(state.schedule, step)
+            used = refine(self.inputs, state, self.integrator, self.roles, planned, memory_bound(self.inputs, state))
+            if used < planned:  # the carved lattice would outgrow max_memory_gib: this stage and later ones stop at it
+                state.schedule = capped(state.schedule, used, step)
+                state.plan.setdefault("memory_caps", []).append([step, planned, used])
+                if self.inputs.progress:
+                    print(f"memory: the stage from step {step} stops at {used} (planned {planned}): its carved grid "
+                          f"would pass max_memory_gib {cfg.max_memory_gib:g}", file=sys.stderr)
             self.adam.reset()
             self.rebuild()
         start = self.schedule and cfg.occupancy_at_step and step >= cfg.occupancy_at_step and not state.occupancy_on

@@ -184,30 +184,46 @@ def stages(cfg, coarse, final):
     return list(zip(starts, levels))
 
 
-# A fit's peak memory per effective surface cell of its final grid: kept vertices per cell (50 to 150 on
-# the real captures: bricks of 8^3 vertices around thin, folded surfaces) times the peak RSS per kept
-# vertex of the full field (365 to 580 bytes: both fields, their optimiser state, the photos). The worst
-# of both, so that the estimate bounds the runs measured (reports/notes.md).
-BYTES_PER_SURFACE_CELL = 150 * 580
+# A fit's peak memory (reports/notes.md, 2026-11-27): a base that grows with the training pixels (the photos,
+# the ray bank: about 400 MiB and 30 bytes a pixel, fern 0.3 and garden 1.5 GiB before any grid) and a share per
+# stored vertex of the fitted fields at colour degree 0: the values, their Adam moments and gradient, the TV's
+# neighbour table and the step's temporaries Dr.Jit's allocator keeps, 296-307 bytes measured on fern and horns
+# (304^3 to 432^3); where a background is refitted after the full field, both fields live at once: 424-466 on the
+# removal family. A few percent above the worst of each:
+BASE_BYTES = 400 * 2 ** 20
+BYTES_PER_PIXEL = 30
+BYTES_PER_VERTEX = {False: 320, True: 480}  # without / with the background refit
+# Stored vertices per effective surface cell of the final grid, for the plan (fern 84 at 304^3, the statue 150 at
+# 576^3: bricks of 8^3 vertices around thin or folded surfaces); every stage then counts its own vertices before it
+# allocates them (:func:`mi_voldis.fit.fields.fitting_resolution`), so a guess too low costs no memory, only a plan
+# whose last stage is capped.
+VERTICES_PER_SURFACE_CELL = 100
 
 
 def memory_scale(sh_degree):
-    """How much more a fit's memory per surface cell holds at colour ``sh_degree`` (0, 1 or 'auto', which
-    starts at 0) than BYTES_PER_SURFACE_CELL, measured at degree 0: its packed floats per vertex over degree
-    0's (4; degree 1: 16). Measured on fern: 7.0 GiB of peak RSS at degree 1 and 336^3 against 1.7 GiB at
-    degree 0 and 304^3, 3.3 times as much per vertex (reports/notes.md)."""
+    """How much more memory a vertex takes at colour ``sh_degree`` (0, 1 or 'auto', which starts at 0) than
+    BYTES_PER_VERTEX, measured at degree 0: its packed floats over degree 0's (4; degree 1: 16). Measured on
+    fern: 7.0 GiB of peak RSS at degree 1 and 336^3 against 1.7 GiB at degree 0 and 304^3, 3.3 times as much
+    per vertex (reports/notes.md)."""
     from ..grid import packet_width
     degree = 0 if sh_degree == "auto" else int(sh_degree)
     return packet_width(1 + 3 * (degree + 1) ** 2) / packet_width(4)
 
 
-def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree):
-    """The finest resolution (a multiple of 16, at least ``coarse``) whose estimated peak memory,
-    ``surface_cells`` (R / surface_resolution)^2 cells of BYTES_PER_SURFACE_CELL memory_scale(sh_degree)
-    bytes, stays within ``max_memory_gib``."""
+def affordable_vertices(cfg, pixels, sh_degree, background):
+    """Stored vertices a fit can hold within ``max_memory_gib``: what the base of ``pixels`` training pixels
+    leaves, at BYTES_PER_VERTEX[``background``] memory_scale(``sh_degree``) bytes each (0 when nothing is left)."""
+    free = cfg.max_memory_gib * 2 ** 30 - BASE_BYTES - BYTES_PER_PIXEL * pixels
+    return max(0.0, free / (BYTES_PER_VERTEX[bool(background)] * memory_scale(sh_degree)))
+
+
+def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree, pixels, background):
+    """The finest resolution (a multiple of 16, at least ``coarse``) whose estimated vertices,
+    ``surface_cells`` (R / surface_resolution)^2 cells of VERTICES_PER_SURFACE_CELL, fit in
+    :func:`affordable_vertices`."""
     cells = surface_cells * (coarse / surface_resolution) ** 2  # at the coarse resolution
-    return _finest(coarse, (cfg.max_memory_gib * 2 ** 30 / (BYTES_PER_SURFACE_CELL * memory_scale(sh_degree))
-                            / cells) ** 0.5)
+    vertices = affordable_vertices(cfg, pixels, sh_degree, background)
+    return _finest(coarse, (vertices / VERTICES_PER_SURFACE_CELL / cells) ** 0.5)
 
 
 def _finest(coarse, ratio):
@@ -215,7 +231,7 @@ def _finest(coarse, ratio):
     return int(max(coarse, 16 * np.floor(coarse * ratio / 16)))
 
 
-def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
+def resolution_bounds(cfg, cost, budget_seconds, survey, pixels, background=False):
     """The finest resolution R (a multiple of 16, at least the coarse one, ``cost.resolution``) each rule
     allows: {"observations": R whose last stage (its share of the budget, stage_starts[-1] to the end)
     still ends ``min_observations`` training rays in each cell where rays end, a step at R costing
@@ -223,13 +239,14 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
     cells (``survey``: :func:`capture_survey`); "pixels": R whose surface cells are no more than the
     ``pixels`` training pixels that end on them over ``pixels_per_voxel``^2 (a cell no pixel ends in has
     nothing to fit); "memory": R whose estimated peak memory stays within ``max_memory_gib``
-    (:func:`memory_resolution`, at the colour degree ``sh_degree`` asks)}. Rays, not passes over the
-    pixels, are the currency: a capture with more views buys the same grid or a finer one.
+    (:func:`memory_resolution`, at the colour degree ``sh_degree`` asks, with a ``background`` refit or
+    not)}. Rays, not passes over the pixels, are the currency: a capture with more views buys the same
+    grid or a finer one.
 
         steps(R) = share budget / cost(R),   rays(R) = steps(R) batch hits
         rays(R) / (cells (R / R_s)^2) >= min_observations
         cells (R / R_s)^2 <= pixels hits / pixels_per_voxel^2
-        cells (R / R_s)^2 BYTES_PER_SURFACE_CELL memory_scale(sh_degree) <= max_memory_gib
+        cells (R / R_s)^2 VERTICES_PER_SURFACE_CELL <= affordable_vertices
     """
     coarse = cost.resolution
     share = 1.0 - (cfg.stage_starts[-1] if cfg.stage_starts else 0.0)
@@ -240,12 +257,12 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
     return {"observations": int(grid[seen].max()) if seen.any() else int(coarse),
             "pixels": _finest(coarse, (pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5),
             "memory": memory_resolution(cfg, survey["surface_cells"], survey["surface_resolution"], coarse,
-                                        cfg.sh_degree)}
+                                        cfg.sh_degree, pixels, background)}
 
 
-def affordable_resolution(cfg, cost, budget_seconds, survey, pixels):
+def affordable_resolution(cfg, cost, budget_seconds, survey, pixels, background=False):
     """The finest resolution all rules of :func:`resolution_bounds` allow."""
-    return min(resolution_bounds(cfg, cost, budget_seconds, survey, pixels).values())
+    return min(resolution_bounds(cfg, cost, budget_seconds, survey, pixels, background).values())
 
 
 def steps_for(plan_stages, cost, budget_seconds):
@@ -283,6 +300,17 @@ def rescale(schedule, steps_full, step, cost, budget_left):
     new_starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
     ahead = [[int(s), r] for s, (_, r) in zip(new_starts[1:], schedule[k + 1:])]
     return schedule[:k + 1] + ahead, int(step + lengths.sum())
+
+
+def capped(schedule, cap, step=0):
+    """``schedule`` with the stages from ``step`` on at most ``cap``, a stage that would repeat the
+    resolution before it dropped."""
+    out = []
+    for start, r in schedule:
+        r = min(r, cap) if start >= step else r
+        if not out or r != out[-1][1]:
+            out.append([start, r])
+    return out
 
 
 def resolution_at(schedule, step):

@@ -63,7 +63,7 @@ from .background import (
     start_cleared,
     start_harmonic,
 )
-from .fields import FitInputs, init_fields
+from .fields import FitInputs, init_fields, refits_background
 from .guide import colour_prior
 from .hull import check_hull
 from .lift import keys_mask, lift_prior
@@ -73,6 +73,7 @@ from .schedule import (
     StepCost,
     auto_minutes,
     backend,
+    capped,
     capture_survey,
     coarse_resolution,
     memory_resolution,
@@ -238,7 +239,7 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
                  final_ratio=cfg.lr_final_ratio ** (sh_step / state.steps_full), desc="full (coarse)", **common)
         problem.sync_states()
         if choose_sh_degree(inputs, state, roles):
-            cap_for_sh_degree(cfg, state, 1)
+            cap_for_sh_degree(inputs, state, 1)
         state.adam.reset()
         problem.rebuild()
         start = sh_step
@@ -248,21 +249,18 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
     state.phase_times["full"] = state.phase_times.get("full", 0.0) + time.perf_counter() - t0
 
 
-def cap_for_sh_degree(cfg, state, degree):
+def cap_for_sh_degree(inputs, state, degree):
     """Degree-1 colour chosen after the plan (``sh_degree`` 'auto'), which was bounded in memory at
     degree 0: stages finer than the memory bound at ``degree`` (:func:`memory_resolution`) take that
     bound instead, a stage that would repeat the one before it is dropped, and the plan records the cap."""
-    plan = state.plan or {}
+    cfg, plan = inputs.cfg, state.plan or {}
     if cfg.resolution != "auto" or "surface_cells" not in plan:
         return
-    cap = memory_resolution(cfg, plan["surface_cells"], plan["surface_resolution"], state.schedule[0][1], degree)
+    cap = memory_resolution(cfg, plan["surface_cells"], plan["surface_resolution"], state.schedule[0][1], degree,
+                            inputs.bank.pixels, refits_background(inputs))
     if all(r <= cap for _, r in state.schedule):
         return
-    capped = []
-    for start, r in state.schedule:
-        if not capped or min(r, cap) != capped[-1][1]:
-            capped.append([start, min(r, cap)])
-    state.schedule = capped
+    state.schedule = capped(state.schedule, cap)
     plan["sh_memory_cap"] = cap
 
 
@@ -319,7 +317,7 @@ def plan_schedule(inputs, state, integrator):
         state.plan.update(minutes=float(minutes), coarse_step_seconds=float(cost.at(coarse)), host_ms=cfg.host_ms,
                           budget_seconds=minutes * 60.0 * (1.0 - RESERVED))
         if survey is not None and survey["surface_cells"]:
-            bounds = resolution_bounds(cfg, cost, budget, survey, inputs.bank.pixels)
+            bounds = resolution_bounds(cfg, cost, budget, survey, inputs.bank.pixels, refits_background(inputs))
             state.plan.update(resolution_bounds=bounds, affordable_resolution=min(bounds.values()))
             final = min(final, state.plan["affordable_resolution"])
     state.plan["final_resolution"] = int(final)
