@@ -72,7 +72,7 @@ def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_
 def memory_at(res, cells=SURVEY["surface_cells"], pixels=PIXELS, background=False, degree=0):
     """The plan's estimate of a fit's peak bytes at ``res``, written out from its constants."""
     from mi_voldis.fit.schedule import BASE_BYTES, BYTES_PER_PIXEL, BYTES_PER_VERTEX, VERTICES_PER_SURFACE_CELL
-    vertices = cells * (res / 64) ** 2 * VERTICES_PER_SURFACE_CELL
+    vertices = min(cells * (res / 64) ** 2 * VERTICES_PER_SURFACE_CELL, res ** 3)  # at most the dense lattice
     per_vertex = BYTES_PER_VERTEX[background] * (4.0 if degree == 1 else 1.0)
     return BASE_BYTES + BYTES_PER_PIXEL * pixels + vertices * per_vertex
 
@@ -85,6 +85,11 @@ def test_affordable_resolution_keeps_the_estimated_memory_within_max_memory_gib(
     rb = affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, PIXELS, background=True)
     assert memory_at(rb, background=True) <= cfg.max_memory_gib * 2 ** 30 < memory_at(rb + 16, background=True)
     assert rb < r < affordable_resolution(cfg.replace(max_memory_gib=16.0), StepCost(1e-6, 64), 1e6, SURVEY, PIXELS)
+    # surfaces counted everywhere on the coarse grid: the dense lattice's vertices bound the estimate
+    everywhere = dict(SURVEY, surface_cells=64 ** 3)
+    rd = affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, everywhere, PIXELS)
+    assert memory_at(rd, 64 ** 3) <= cfg.max_memory_gib * 2 ** 30 < memory_at(rd + 16, 64 ** 3)
+    assert memory_at(rd, 64 ** 3) == memory_at(rd, 1e9) and rd > 64
     # the photos' share comes first: a capture whose pixels fill the memory gets the coarse grid
     assert affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, 2 ** 32 // 30) == 64
 

@@ -218,12 +218,16 @@ def affordable_vertices(cfg, pixels, sh_degree, background):
 
 
 def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree, pixels, background):
-    """The finest resolution (a multiple of 16, at least ``coarse``) whose estimated vertices,
-    ``surface_cells`` (R / surface_resolution)^2 cells of VERTICES_PER_SURFACE_CELL, fit in
-    :func:`affordable_vertices`."""
+    """The finest resolution R (a multiple of 16, at least ``coarse``) whose estimated vertices fit in
+    :func:`affordable_vertices`: ``surface_cells`` (R / surface_resolution)^2 cells of
+    VERTICES_PER_SURFACE_CELL each, but never more than the dense lattice's R^3 (surfaces counted on a
+    coarse grid that fill much of it: garden in a contracted space whose inner cube holds only what the
+    cameras look at had 49,797 effective cells at 64^3, an estimate of 7.8 M vertices at 80^3, where the
+    whole lattice holds 0.51 M)."""
     cells = surface_cells * (coarse / surface_resolution) ** 2  # at the coarse resolution
     vertices = affordable_vertices(cfg, pixels, sh_degree, background)
-    return _finest(coarse, (vertices / VERTICES_PER_SURFACE_CELL / cells) ** 0.5)
+    return max(_finest(coarse, (vertices / VERTICES_PER_SURFACE_CELL / cells) ** 0.5),
+               _finest(coarse, vertices ** (1 / 3) / coarse))
 
 
 def _finest(coarse, ratio):
@@ -246,7 +250,7 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels, background=Fals
         steps(R) = share budget / cost(R),   rays(R) = steps(R) batch hits
         rays(R) / (cells (R / R_s)^2) >= min_observations
         cells (R / R_s)^2 <= pixels hits / pixels_per_voxel^2
-        cells (R / R_s)^2 VERTICES_PER_SURFACE_CELL <= affordable_vertices
+        min(cells (R / R_s)^2 VERTICES_PER_SURFACE_CELL, R^3) <= affordable_vertices
     """
     coarse = cost.resolution
     share = 1.0 - (cfg.stage_starts[-1] if cfg.stage_starts else 0.0)

@@ -14,7 +14,6 @@ import drjit as dr  # noqa: E402
 
 from mi_voldis.fit import problem  # noqa: E402
 
-
 WHOS_AT = (850,)  # steps whose live arrays are listed
 
 
