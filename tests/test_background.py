@@ -157,6 +157,32 @@ def test_a_fit_without_the_contrib_modules_uses_telea_and_records_it(monkeypatch
     assert state.prior["inpainter"] == "telea"
 
 
+def test_the_background_refit_steps_with_its_own_rates_and_tv(monkeypatch, tmp_path):
+    """The refit takes bg_lr_* and bg_tv_*, not the full phase's lr_* and tv_*: its Adam rates per packed
+    slot are the refit's (density in channel 0, colour in the rest)."""
+    from mi_voldis.fit import train
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene(views=5)
+    cfg = cfg.replace(bg_strategy="harmonic", steps_bg=2, lr_density=0.7, lr_color=0.6, tv_density=0.5,
+                      tv_color=0.4, bg_lr_density=0.03, bg_lr_color=0.02, bg_tv_density=2e-3, bg_tv_color=1e-3)
+    seen = []
+
+    class Recording(train.FieldFit):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            seen.append((self.roles, self.rates, self.tv, list(self.adam.lrs["bg.packed"])))
+
+    monkeypatch.setattr(train, "FieldFit", Recording)
+    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, cfg.adam_beta1, cfg.adam_beta2),
+                     fields={"full": full})
+    state.schedule, state.steps_full = [[0, 40]], 1
+    checkpoint = str(tmp_path / "state.npz")
+    state.save(checkpoint, "bg", 0)
+    train.fit(ds, checkpoint, cfg, resume=True, progress=False)
+    assert [(roles, rates, tv) for roles, rates, tv, _ in seen] == [(("bg",), (0.03, 0.02), (2e-3, 1e-3))]
+    lrs = seen[0][3]
+    assert lrs[0] == 0.03 and set(lrs[1:full.channels]) == {0.02} and not any(lrs[full.channels:])
+
+
 def test_the_run_records_its_inpainter(tiny_run):
     """metrics.json's bg_prior names the 2D inpainter the default 'auto' became on this machine."""
     import json

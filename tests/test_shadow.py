@@ -31,11 +31,12 @@ def _in_shadow(points, light):
     return _clearance(points, light) < RADIUS
 
 
-def scene(light=LIGHT, shade_from="light", views=6, size=(96, 72)):
+def scene(light=LIGHT, shade_from="light", views=6, size=(96, 72), direct=0.75):
     """Cameras on a ring looking at the sphere; per camera its depth, the sphere's mask, the exact shadow
     on the floor, and a photo: a checkered floor (albedo 0.35 / 0.55) lit by ``light`` (a quarter of it
     in shadow: ambient) or, with ``light`` None, evenly; the sphere (albedo 0.5) shaded by the light at
-    ``shade_from`` (the same light by default; None: evenly)."""
+    ``shade_from`` (the same light by default; None: evenly), ``direct`` of its light at normal incidence
+    the light's and the rest ambient."""
     shade_from = light if isinstance(shade_from, str) else shade_from
     cams, depths, masks, shadows, photos = [], [], [], [], []
     for a in np.linspace(0.0, 2 * np.pi, views, endpoint=False):
@@ -57,7 +58,7 @@ def scene(light=LIGHT, shade_from="light", views=6, size=(96, 72)):
         if shade_from is not None:
             normal = (pts - CENTRE) / RADIUS
             to = (shade_from - pts) / np.linalg.norm(shade_from - pts, axis=1, keepdims=True)
-            ball = 0.5 * (0.25 + 0.75 * np.maximum(np.sum(normal * to, axis=1), 0.0))
+            ball = 0.5 * (1.0 - direct + direct * np.maximum(np.sum(normal * to, axis=1), 0.0))
         lum = np.where(mask, ball, albedo * np.where(shade, 0.25, 1.0))
         cams.append(cam)
         depths.append(np.where(np.isfinite(depth), depth, np.nan).reshape(cam.height, cam.width))
@@ -162,3 +163,39 @@ def test_a_light_among_the_points_maps_those_ahead_of_it():
     assert not smap.shadowed((CENTRE + np.array([0.0, 2.0, 0.0]))[None])[0]  # behind the light
     near = smap.near[np.isfinite(smap.near)]
     assert near.min() > smap.radius and near.max() < 2 * RADIUS  # only the sphere's far side, ahead of it
+
+
+def test_predicted_shading_follows_the_two_term_model():
+    """Points facing the light at cosine c: log(1 + k c) with k = (exp(contrast) - 1) / cos_r, averaged
+    over the points past FACING; the points facing away do not count."""
+    light = np.array([0.0, 10.0, 0.0])
+    cos = np.array([1.0, 0.5, 0.1, -0.6])  # the last two: not facing it (0.1 < FACING) or facing away
+    normals = np.stack([np.sqrt(1 - cos ** 2), cos, np.zeros(4)], -1)
+    surface = ObjectSurface(np.zeros((4, 3)), normals, np.zeros(4), 0.01)
+    contrast, receiver_cos = np.log(3.0), 0.5  # k = 2 / 0.5 = 4
+    want = np.mean(np.log1p(4.0 * cos[:2]))
+    assert np.isclose(surface.predicted_shading(light, contrast, receiver_cos), want, rtol=1e-6)
+    # a grazing receiver asks a far stronger light for the same contrast
+    assert surface.predicted_shading(light, contrast, 0.05) > 2 * want
+
+
+def test_a_grazing_lights_shadow_the_objects_shading_cannot_match_is_not_kept(monkeypatch):
+    """The floor darkened 4x where a light 10 degrees above it would shadow the sphere, the sphere lit
+    by that light with half its light direct: log(1 + c) on its lit side, where a light that strong
+    at that angle would leave about log(1 + 15 c). The old rule (shading above MIN_SHADING, the step
+    in the photos) kept it; the shading check leaves it out."""
+    from mi_voldis.fit import shadow
+    grazing = np.array([-2.6, 0.0, 0.8])
+    cams, depths, masks, _, photos = scene(light=grazing, direct=0.5)
+    surface = ObjectSurface.of(cams, photos, masks, depths)
+    views = ShadowViews.of(cams, photos, masks, depths, mask_grow=1)
+    assert surface.shading(grazing) > shadow.MIN_SHADING
+    found, _ = find_light(views, surface, min_contrast=0.2)
+    assert not found.kept or found.predicted_shading <= shadow.MAX_SHADING_RATIO * found.shading
+    cos = np.dot(found.position - CENTRE, grazing - CENTRE) / np.linalg.norm(found.position - CENTRE) / \
+        np.linalg.norm(grazing - CENTRE)
+    assert not found.kept or cos < np.cos(np.radians(20))
+    monkeypatch.setattr(shadow, "MAX_SHADING_RATIO", np.inf)
+    old, _ = find_light(views, surface, min_contrast=0.2)
+    assert old.kept and np.dot(old.position - CENTRE, grazing - CENTRE) / np.linalg.norm(
+        old.position - CENTRE) / np.linalg.norm(grazing - CENTRE) > np.cos(np.radians(20))

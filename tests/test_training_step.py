@@ -69,18 +69,21 @@ def test_adam_zero_rate_slots_stay_put():
 def test_packed_regularisers_match_the_tensor_formulas():
     """On a brick grid with every brick allocated: sparsity on density, TV on every channel group with its
     own weight (the dense formula on each tensor), the hull mask and the density's own mask within it,
-    padding and the empty brick untouched."""
+    padding and the empty brick untouched. The TV weights are the phase's own (the background refit has
+    its own), not the config's."""
     rng = np.random.default_rng(3)
     d, c = rng.normal(0, 1, (5, 6, 7, 1)).astype(np.float32), rng.normal(0, 1, (5, 6, 7, 12)).astype(np.float32)
     field = mi.load_dict(brick_field_dict(d, c, brick=4))
     layout, b3 = field.layout, field.layout.vertices_per_brick
-    cfg = FitConfig(tv_every=2, tv_density=1e-2, tv_color=3e-3, sparsity=1e-1)
+    cfg = FitConfig(tv_every=2, tv_density=5.0, tv_color=7.0, sparsity=1e-1)
+    tv_density, tv_color = 1e-2, 3e-3
     params = PackedParameters({"full": field})
     coords, inside = layout.vertex_coords()
     keep = (np.arange(field.layout.slots * b3) % 3 != 0).astype(np.float32)
     shaped = (np.arange(field.layout.slots * b3) % 2 != 0).astype(np.float32)
     state = field_state.FieldState(layout, field.packed, 13, np.eye(4))
     fake = SimpleNamespace(inputs=SimpleNamespace(cfg=cfg), roles=("full",), params=params, hull=mi.Float(keep),
+                           tv=(tv_density, tv_color),
                            density_hull=mi.Float(shaped),
                            integrator=SimpleNamespace(fields={"full": field}), neighbours={},
                            state=SimpleNamespace(fields={"full": state}))
@@ -99,8 +102,8 @@ def test_packed_regularisers_match_the_tensor_formulas():
             pad[axis] = (0, 1)
             g -= 2 * np.pad(diff, pad)  # d/dt[v] of (t[v+1] - t[v])^2
         return g
-    want_d = (cfg.sparsity / stored) / (1 + np.exp(-td)) + 2 * cfg.tv_density * 16 * dense_tv(td) / (stored * 16)
-    want_c = 2 * cfg.tv_color * 16 / 12 * dense_tv(tc) / (stored * 16)
+    want_d = (cfg.sparsity / stored) / (1 + np.exp(-td)) + 2 * tv_density * 16 * dense_tv(td) / (stored * 16)
+    want_c = 2 * tv_color * 16 / 12 * dense_tv(tc) / (stored * 16)
     mask = bricks.to_dense(np.repeat(keep, 16), layout, 16)[..., 0]
     density_mask = mask * bricks.to_dense(np.repeat(shaped, 16), layout, 16)[..., 0]
     assert 0 < density_mask.sum() < mask.sum()

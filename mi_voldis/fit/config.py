@@ -54,7 +54,10 @@ def _fractions_error(value):
 
 @dataclass
 class FitConfig(Settings):
-    ADDED = {"host_ms": 0.0}  # plans before it had no host term  (not a field: no annotation)
+    # settings added since runs were first recorded, at the values those runs were fitted with (not a field:
+    # no annotation): plans before host_ms had no host term; background refits before bg_lr_* / bg_tv_*
+    # stepped with the then default rates and TV weights
+    ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -109,6 +112,11 @@ class FitConfig(Settings):
                                                      "...] (null: derived from the settings above)",
                                                check=_schedule_error)
     steps_bg: int = setting(150, "steps of the background refit (every bg_strategy but 'scratch')", low=0)
+    # the refit has its own rates and TV weights: it starts from a fitted field and reshapes the hole only
+    bg_lr_density: float = setting(0.1, "Adam learning rate of raw density in the background refit", above=0)
+    bg_lr_color: float = setting(0.05, "Adam learning rate of raw colour in the background refit", above=0)
+    bg_tv_density: float = setting(1e-4, "total variation of raw density in the background refit", low=0)
+    bg_tv_color: float = setting(1e-5, "total variation of raw colour coefficients in the background refit", low=0)
     batch_rays: int | str = setting("auto", "random rays per step, drawn across all training views ('auto': the "
                                             "backend's, 8192 on llvm, 32768 on cuda)", check=_auto_or(True, low=1))
     batch_tile: int = setting(1, "> 1: rays in tile x tile pixel tiles (coherent: faster marches, worse "
@@ -117,9 +125,9 @@ class FitConfig(Settings):
     max_samples: int = setting(512, "cap on samples per ray", low=1)
 
     # ---- optimiser: Adam on raw grid values, exponential decay to lr * lr_final_ratio
-    lr_density: float = setting(0.1, "Adam learning rate of raw density (grids want far larger rates than "
-                                     "NeRF MLPs)", above=0)
-    lr_color: float = setting(0.05, "Adam learning rate of raw colour", above=0)
+    lr_density: float = setting(0.1, "Adam learning rate of raw density in the full phase (grids want far larger "
+                                     "rates than NeRF MLPs)", above=0)
+    lr_color: float = setting(0.05, "Adam learning rate of raw colour in the full phase", above=0)
     lr_final_ratio: float = setting(0.1, "learning rates decay exponentially to this fraction", above=0, high=1)
     adam_beta1: float = setting(0.9, "Adam's first-moment decay", low=0, high=0.999999)
     adam_beta2: float = setting(0.99, "Adam's second-moment decay", low=0, high=0.999999)
@@ -134,8 +142,8 @@ class FitConfig(Settings):
     sh_trial_steps: int = setting(100, "'auto': colour-only steps of each degree's trial fit", low=1)
 
     # ---- regularisers (weights on per-vertex means; gradients added directly to the grids)
-    tv_density: float = setting(1e-4, "total variation of raw density", low=0)
-    tv_color: float = setting(1e-5, "total variation of raw colour coefficients", low=0)
+    tv_density: float = setting(1e-4, "total variation of raw density in the full phase", low=0)
+    tv_color: float = setting(1e-5, "total variation of raw colour coefficients in the full phase", low=0)
     tv_every: int = setting(4, "apply the TV gradient (scaled by this) every k steps: it costs a pass over "
                                "the whole grid", low=1)
     sparsity: float = setting(1e-5, "L1 on activated density: empty space stays empty", low=0)

@@ -38,7 +38,7 @@ class FieldFit:
     resolution schedule and start empty-space skipping."""
 
     def __init__(self, inputs, state, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
-                 rates=None, fit_exposure=False, prior=None, density_hull=None):
+                 rates=None, tv=None, fit_exposure=False, prior=None, density_hull=None):
         self.inputs, self.state, self.roles, self.layers, self.bank = inputs, state, roles, layers, bank
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
         self.density_hull = density_hull
@@ -47,6 +47,7 @@ class FieldFit:
         self.adam = state.adam if adam is None else adam
         cfg = inputs.cfg
         self.rates = (cfg.lr_density, cfg.lr_color) if rates is None else rates  # (density, colour)
+        self.tv = (cfg.tv_density, cfg.tv_color) if tv is None else tv  # TV weights (density, colour)
         self.on_stage = None  # called with the step at each later stage's start (before the fields are refined)
         # and every REPLAN_EVERY steps: the schedule may be rescaled there
         self.rebuild(resume=True)
@@ -172,8 +173,8 @@ class FieldFit:
             if tv:  # tv_gradient averages over every slot: rescale to per-vertex means of each channel group
                 if r not in self.neighbours:
                     self.neighbours[r] = neighbour_vertices(self.state.fields[r])
-                weights = self.params.per_slot(r, tv * cfg.tv_density * f.width,
-                                               tv * cfg.tv_color * f.width / (f.channels - 1))
+                weights = self.params.per_slot(r, tv * self.tv[0] * f.width,
+                                               tv * self.tv[1] * f.width / (f.channels - 1))
                 weight = dr.gather(mi.Float, from_numpy(mi.Float, weights), channel)
                 g = g + weight * tv_gradient(values, f.width, self.neighbours[r])
             if self.hull is not None:  # refit only inside the hull

@@ -26,7 +26,15 @@ both sides in the views). Candidates: directions on a sphere around c (Fibonacci
 object radii to far away, then three rounds of refinement around the best. Best: the largest edge
 contrast among the candidates whose t reaches ``SUPPORT`` of the largest t (contrast alone would
 favour a sliver on one dark spot; t alone a larger shadow that also takes in dark ground beside the
-true one, whose edge then falls where the photos do not step). The light is kept when the step is
+true one, whose edge then falls where the photos do not step). The light must also explain the
+shadow's depth and the object's shading together, with radiance = albedo (ambient + direct cos): the
+shadow takes the direct term away, so its pooled contrast c on receivers at median cosine cos_r to the
+light asks a direct-to-ambient ratio k = (exp(c) - 1) / cos_r, which would leave the object's points
+facing the light brighter than those facing away by mean log(1 + k cos) (:meth:`ObjectSurface.
+predicted_shading`). A candidate whose predicted shading exceeds the measured one by more than
+``MAX_SHADING_RATIO`` is no light of this scene: a grazing light that darkens the ground by c must be
+strong, and would light the object's sides far more than the photos show (on the removal family such
+lights were tens of degrees off the true one; reports/notes.md). The light is kept when the step is
 at least ``min_contrast``, pooled and in ``MIN_AGREE`` of the views that have the shadow in sight.
 The effect masks are then each training view's shadowed pixels, grown by ``GROW`` (penumbra, the
 point cloud's coarseness).
@@ -54,6 +62,8 @@ EPS = 1e-3  # log luminance floor (linear)
 MIN_SHADING = 0.2  # a candidate light must leave the object this much brighter (log) on its side than on the other
 SIDE_SHARE = 0.1  # the object's seen points on either side of the light's terminator, at least (else unjudged)
 FACING = 0.2  # |cos| between the object's normal and the light beyond which it faces the light, or away
+MAX_SHADING_RATIO = 1.5  # a light's predicted object shading over the measured one, at most (module docstring)
+MIN_RECEIVER_COS = 0.02  # receivers at a grazing angle to the light: the cosine that k divides by, at least
 GROW = 0.005  # the effect masks grow by this fraction of the image diagonal (penumbra, the cloud's coarseness)
 BIG = 3.0e38  # an empty texel in the min filter
 KEY_MIX = np.array([1, 1 << 21, 1 << 42], np.int64)  # a cell's integer coordinates (|i| < 2^20) as one key
@@ -63,17 +73,21 @@ KEY_MIX = np.array([1, 1 << 21, 1 << 42], np.int64)  # a cell's integer coordina
 class ShadowLight:
     """The light found: its position (world), its t statistic and edge contrast (log luminance,
     pooled), the share of views whose own contrast passes, how much it shades the object
-    (:meth:`ObjectSurface.shading`), and whether it is kept."""
+    (:meth:`ObjectSurface.shading`), whether it is kept, the shadowed receivers' median cosine to it and
+    the shading its shadow predicts (:meth:`ObjectSurface.predicted_shading`)."""
     position: np.ndarray
     t: float
     contrast: float
     agree: float
     shading: float
     kept: bool
+    receiver_cos: float
+    predicted_shading: float
 
     def record(self):
         return {"light": [float(x) for x in self.position], "t": float(self.t), "contrast": float(self.contrast),
-                "views_agree": float(self.agree), "shading": float(self.shading), "kept": bool(self.kept)}
+                "views_agree": float(self.agree), "shading": float(self.shading), "kept": bool(self.kept),
+                "receiver_cos": float(self.receiver_cos), "predicted_shading": float(self.predicted_shading)}
 
 
 def fibonacci_sphere(n):
@@ -155,9 +169,10 @@ class ShadowMap:
 @dataclass
 class ShadowViews:
     """The scored pixels of some views: per view the world points of its strided pixels (NaN where no
-    surface), their log linear RGB (n, 3), and which may hold the shadow (outside the mask grown by
-    ``mask_grow`` pixels)."""
+    surface), their unit normals (:func:`surface_points`), their log linear RGB (n, 3), and which may hold
+    the shadow (outside the mask grown by ``mask_grow`` pixels)."""
     points: list
+    normals: list
     ell: list
     free: list
     shapes: list
@@ -165,28 +180,32 @@ class ShadowViews:
 
     @classmethod
     def of(cls, cameras, images, masks, depths, mask_grow, pixels=SCORE_PIXELS):
-        points, ell, free, shapes, areas = [], [], [], [], []
+        points, normals, ell, free, shapes, areas = [], [], [], [], [], []
         for cam, image, mask, depth in zip(cameras, images, masks, depths):
             h, w = mask.shape
             s = max(1, int(np.ceil(np.sqrt(h * w / pixels))))
             ys, xs = np.mgrid[s // 2:h:s, s // 2:w:s]
-            o, d = pixel_rays(cam, xs.reshape(-1) + 0.5, ys.reshape(-1) + 0.5)
-            points.append(o + depth[ys, xs].reshape(-1)[:, None] * d)
+            p, n = surface_points(cam, depth, xs, ys)
+            points.append(p)
+            normals.append(n)
             ell.append(np.log(srgb_to_linear(np.clip(image[ys, xs], 0, 1)).reshape(-1, 3) + EPS))
             free.append((~dilate(mask, mask_grow)[ys, xs] & np.isfinite(depth[ys, xs])).reshape(-1))
             shapes.append(ys.shape)
             areas.append(int(mask[ys, xs].sum()))
-        return cls(points, ell, free, shapes, areas)
+        return cls(points, normals, ell, free, shapes, areas)
 
     def score(self, smap, min_contrast):
-        """Pooled (t, contrast) of the views' predicted shadows across their edges, and the share of
-        them whose own contrast reaches ``min_contrast``, over the views that have the predicted shadow
-        in sight (at least ``MIN_SHARE`` of the object's area; zeros if fewer than two do). A shadow
+        """Pooled (t, contrast) of the views' predicted shadows across their edges, the share of them
+        whose own contrast reaches ``min_contrast``, and the median cosine between the shadowed
+        receivers' normals and the light, over the views that have the predicted shadow in sight (at
+        least ``MIN_SHARE`` of the object's area; zeros if fewer than two do). A shadow
         that stays out of sight behind the object, a sliver along its silhouette, is left out: there the
         object's soft edge and the darkening where it meets the floor would pass for one."""
         diff = wsum = var = 0.0
         views = agree = 0
-        for pts, ell, free, shape, area in zip(self.points, self.ell, self.free, self.shapes, self.areas):
+        cosines = []
+        for pts, nrm, ell, free, shape, area in zip(self.points, self.normals, self.ell, self.free, self.shapes,
+                                                    self.areas):
             s = np.zeros(len(free), bool)
             s[free] = smap.shadowed(pts[free])
             if s.sum() < max(4, MIN_SHARE * area):
@@ -206,9 +225,15 @@ class ShadowViews:
             var += n * n * (a.var() / len(a) + b.var() / len(b))
             views += 1
             agree += c >= min_contrast
+            to_light = smap.light - pts[s]
+            with np.errstate(invalid="ignore"):
+                cosines.append(np.sum(nrm[s] * to_light, axis=1) / np.linalg.norm(to_light, axis=1))
         if views < 2:  # one view is no multi-view evidence
-            return 0.0, 0.0, 0.0
-        return diff / np.sqrt(var + 1e-12), diff / wsum, agree / views
+            return 0.0, 0.0, 0.0, 0.0
+        cosines = np.concatenate(cosines)
+        cosines = cosines[np.isfinite(cosines)]  # normals are NaN at depth edges
+        return diff / np.sqrt(var + 1e-12), diff / wsum, agree / views, float(np.median(cosines)) if len(
+            cosines) else 0.0
 
 
 def surface_points(camera, depth, xs, ys):
@@ -276,6 +301,17 @@ class ObjectSurface:
             return 0.0
         return float(self.ell[lit].mean() - self.ell[dark].mean())
 
+    def predicted_shading(self, light, contrast, receiver_cos):
+        """The shading :meth:`shading` would measure were ``light`` the light whose shadow darkens
+        receivers at median cosine ``receiver_cos`` to it by ``contrast`` (log), radiance = albedo
+        (ambient + direct cos): k = (exp(contrast) - 1) / cos_r, then mean log(1 + k cos) over the
+        points facing the light (the points facing away take ambient alone)."""
+        k = np.expm1(max(contrast, 0.0)) / max(receiver_cos, MIN_RECEIVER_COS)
+        with np.errstate(invalid="ignore"):
+            cos = np.sum((light - self.points) * self.normals, axis=1) / np.linalg.norm(light - self.points, axis=1)
+        lit = cos > FACING
+        return float(np.mean(np.log1p(k * cos[lit]))) if lit.any() else 0.0
+
 
 def find_light(views, surface, min_contrast, min_agree=MIN_AGREE, max_points=20000, seed=0):
     """The light whose shadow of the object (``surface``, :class:`ObjectSurface`) best explains the
@@ -292,12 +328,16 @@ def find_light(views, surface, min_contrast, min_agree=MIN_AGREE, max_points=200
     radius = spacing / np.sqrt(2.0)
     centre = obj.mean(0)
     size = float(np.percentile(np.linalg.norm(obj - centre, axis=1), 95))
-    none = (0.0, -np.inf, 0.0)
+    none = (0.0, -np.inf, 0.0, 0.0)
 
     def evaluate(p):
-        if surface.shading(p) < MIN_SHADING:
+        shading = surface.shading(p)
+        if shading < MIN_SHADING:
             return none
-        return views.score(ShadowMap(p, centre, obj, radius), min_contrast)
+        s = views.score(ShadowMap(p, centre, obj, radius), min_contrast)
+        if s[1] > 0 and surface.predicted_shading(p, s[1], s[3]) > MAX_SHADING_RATIO * shading:
+            return none  # a shadow this deep from there would shade the object far more than it is
+        return s
 
     cands = [centre + size * r * d for r in DISTANCES for d in fibonacci_sphere(DIRECTIONS)]
     scores = [evaluate(p) for p in cands]
@@ -311,7 +351,7 @@ def find_light(views, surface, min_contrast, min_agree=MIN_AGREE, max_points=200
         if better(s, sc):
             p, sc = q, s
     if p is None:  # no light shades the object, or no shadow darkens the photos: nothing to search around
-        return ShadowLight(centre, 0.0, 0.0, 0.0, 0.0, False), (obj, radius, centre)
+        return ShadowLight(centre, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0), (obj, radius, centre)
     spread, factor = np.sqrt(4.0 * np.pi / DIRECTIONS), 2.0  # the coarse grid's spacing (radians, ratio)
     for _ in range(3):
         offset = p - centre
@@ -326,9 +366,9 @@ def find_light(views, surface, min_contrast, min_agree=MIN_AGREE, max_points=200
                     if better(s, sc):
                         p, sc = q, s
         spread, factor = spread / 2.5, np.sqrt(factor)
-    t, contrast, agree = sc
-    return (ShadowLight(p, t, contrast, agree, surface.shading(p), contrast >= min_contrast and agree >= min_agree),
-            (obj, radius, centre))
+    t, contrast, agree, receiver_cos = sc
+    return (ShadowLight(p, t, contrast, agree, surface.shading(p), contrast >= min_contrast and agree >= min_agree,
+                        receiver_cos, surface.predicted_shading(p, contrast, receiver_cos)), (obj, radius, centre))
 
 
 def shadow_masks(light, occluder, cameras, masks, depths, grow):
@@ -356,10 +396,14 @@ def find_shadow(inputs, state, views=12):
     training view, ``views`` of them spread over the set scored; None when no light passes
     ``shadow_contrast``. Also returns the light's record."""
     from .lift import training_depths
-    ds, cfg = inputs.ds, inputs.cfg
-    masked = list(ds.masked_train)
-    depth = training_depths(inputs, state, count=len(ds.train), median=True)
-    masked = [v for v in masked if v in depth]
+    ds = inputs.ds
+    return shadow_of_depths(ds, inputs.cfg, training_depths(inputs, state, count=len(ds.train), median=True), views)
+
+
+def shadow_of_depths(ds, cfg, depth, views=12):
+    """:func:`find_shadow` from the full field's median depth maps ``depth`` (view -> (H, W), NaN where
+    no surface) of the dataset ``ds``'s masked training views, with the settings ``cfg``."""
+    masked = [v for v in ds.masked_train if v in depth]
     if not masked:
         return None, None
     cams, masks, depths = ([seq[v] for v in masked] for seq in (ds.cameras, ds.masks, depth))

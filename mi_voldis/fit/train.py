@@ -168,7 +168,8 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         prior = (colour_prior(inputs, state, inpainter or cfg.prior_inpainter)
                  if cfg.bg_strategy == "guided" and cfg.prior_weight > 0 else None)
         problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
-                           schedule=False, prior=prior, density_hull=shaped)
+                           schedule=False, prior=prior, density_hull=shaped, rates=(cfg.bg_lr_density, cfg.bg_lr_color),
+                           tv=(cfg.bg_tv_density, cfg.bg_tv_color))
         optimize(problem, state.adam, steps=cfg.steps_bg, start=state.step, final_ratio=cfg.lr_final_ratio,
                  log=state.log, desc="bg refit", checkpoint=checkpoint_at("bg")(problem),
                  checkpoint_every=cfg.checkpoint_every, progress=progress)
