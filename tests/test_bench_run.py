@@ -151,7 +151,8 @@ def test_a_capture_without_masks_is_scored_with_the_masks_its_background_was_fit
 
 def test_a_row_with_the_runs_own_settings_scores_its_background_as_a_refit_would(tiny_dataset, tmp_path):
     """The default row on a run fitted with today's defaults reuses the run's background (its seconds
-    are the run's background phase); forced to refit (the dataset given again) it scores the same."""
+    are the run's background phase); forced to refit (``--refit``, or the dataset given again) it scores
+    the same."""
     import json
 
     from conftest import TINY_FIT
@@ -163,9 +164,12 @@ def test_a_row_with_the_runs_own_settings_scores_its_background_as_a_refit_would
     run_fit(tiny_dataset, run, FitConfig.from_sources(None, TINY_FIT), progress=False, keep_checkpoints=True)
     strategies([run, "guided", str(tmp_path / "reused")])
     strategies([run, "guided", str(tmp_path / "refit"), tiny_dataset])
+    strategies([run, "guided", str(tmp_path / "forced"), "--refit"])
     reused = json.loads((tmp_path / "reused" / "metrics.json").read_text())
-    refit = json.loads((tmp_path / "refit" / "metrics.json").read_text())
     bg_seconds = json.loads((tmp_path / "run" / "metrics.json").read_text())["seconds"]["phase_bg"]
-    assert reused["seconds"] == bg_seconds and refit["seconds"] != bg_seconds
-    for key in ("psnr_mask", "psnr_outside", "consistency_psnr", "bg_haze_mask"):
-        assert abs(reused["methods"]["volume"][key] - refit["methods"]["volume"][key]) < 1e-3, key
+    assert reused["seconds"] == bg_seconds
+    for name in ("refit", "forced"):
+        refit = json.loads((tmp_path / name / "metrics.json").read_text())
+        assert refit["seconds"] != bg_seconds
+        for key in ("psnr_mask", "psnr_outside", "consistency_psnr", "bg_haze_mask"):
+            assert abs(reused["methods"]["volume"][key] - refit["methods"]["volume"][key]) < 1e-3, (name, key)

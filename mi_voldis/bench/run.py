@@ -277,12 +277,14 @@ def refitted_since(metrics, run):
 
 
 def strategy_rows(work, scene, run, strategies, logs):
-    """Each of ``strategies`` refitted from ``run``'s full field: its metrics, wall seconds and command."""
+    """Each of ``strategies`` refitted from ``run``'s full field: its metrics, wall seconds and command.
+    Always refitted (``--refit``): a run kept from before a change to the background phase's code holds
+    a background today's code would not fit."""
     rows = {}
     for strategy in strategies:
         name, switch = strategy_switch(strategy)
         out = os.path.join(work, "removal", scene, strategy)
-        args = ["-m", "mi_voldis.bench.strategies", run["out"], name, out] + switch
+        args = ["-m", "mi_voldis.bench.strategies", run["out"], name, out, "--refit"] + switch
         done = os.path.join(out, "metrics.json")
         reuse = refitted_since(done, run["out"])  # a rerun after an interruption keeps what it finished
         wall = None if reuse else child(args, os.path.join(logs, f"removal_{scene}_{strategy}.log"))
@@ -315,7 +317,7 @@ def run_masks(work, report_dir, scenes=None):
         default = FitConfig().bg_strategy  # the made masks' removal uses it too (mi_voldis.bench.masks)
         base = os.path.join(work, "removal", scene, default)
         if not os.path.isfile(os.path.join(base, "metrics.json")):
-            child(["-m", "mi_voldis.bench.strategies", run["out"], default, base],
+            child(["-m", "mi_voldis.bench.strategies", run["out"], default, base, "--refit"],
                   os.path.join(logs, f"removal_{scene}_{default}.log"))
         out = os.path.join(work, "masks", scene)
         shutil.rmtree(out, ignore_errors=True)

@@ -1,10 +1,11 @@
 """Removal by background strategy, from one fitted full field (the benchmark's removal section).
 
-    python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET] [--set KEY=VALUE ...]
+    python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET] [--set KEY=VALUE ...] [--refit]
 
 RUN: a finished fit kept with ``--keep-checkpoints``; its final state's full field is reused, the
 background is fitted again with ``bg_strategy=STRATEGY`` (where RUN's settings are those very ones, its own
-background is scored instead: the same computation) (the background phase's other settings,
+background is scored instead: the same computation, unless ``--refit``, for a background phase whose
+code changed since RUN was fitted; the benchmark always refits) (the background phase's other settings,
 :data:`BACKGROUND_SETTINGS`, as today's defaults, whatever RUN recorded; every other one as RUN's
 config.json), and
 OUT receives ``metrics.json``, the background of each held-out view as PNG and, where the foreground is
@@ -135,11 +136,13 @@ def coverage_errors(photo, found, truth):
 
 def main(argv=None):
     argv = list(argv or sys.argv[1:])
+    refit = "--refit" in argv
+    argv = [a for a in argv if a != "--refit"]
     sets = [argv[k + 1] for k, a in enumerate(argv) if a == "--set" and k + 1 < len(argv)]
     argv = [a for k, a in enumerate(argv) if a != "--set" and (k == 0 or argv[k - 1] != "--set")]
     if len(argv) < 3:
         raise SystemExit("usage: python -m mi_voldis.bench.strategies RUN STRATEGY OUT [MASKED_DATASET] "
-                         "[--set KEY=VALUE ...]")
+                         "[--set KEY=VALUE ...] [--refit]")
     run, strategy, out = argv[:3]
     from ..data import load_dataset
     from ..fit.fields import fit_integrator
@@ -165,7 +168,7 @@ def main(argv=None):
         raise SystemExit(f"error: {run}: no checkpoints/last.npz (fit it with --keep-checkpoints)")
     # the run's own background where it was fitted with these very settings (a refit is the same
     # computation: the same full field, settings and seed); else the background is fitted again
-    reuse = state.phase == "done" and len(argv) == 3 and same_settings(run, cfg)
+    reuse = state.phase == "done" and len(argv) == 3 and not refit and same_settings(run, cfg)
     if not reuse:
         state.fields.pop("bg", None)
         state.hull_points = state.prior = state.prior_keys = state.occupancy = None

@@ -1,6 +1,6 @@
 """The shadow search alone (mi_voldis.fit.shadow.find_shadow) on fitted runs kept with their checkpoints.
 
-    python reports/experiments/2026-11-27/shadow/search.py RUN [RUN ...] > out.json
+    python reports/experiments/2026-11-27/shadow/search.py RUN [RUN ...] [--set KEY=VALUE ...] > out.json
 
 Per RUN: the light its fit recorded (metrics.json bg_prior.shadow) beside the light today's code finds
 from the same full field, and for the removal family's scenes the true light (the rectangle emitter or
@@ -42,8 +42,8 @@ def angle(a, b):
     return float(np.degrees(np.arccos(np.clip(a @ b / np.linalg.norm(a) / np.linalg.norm(b), -1, 1))))
 
 
-def search(run):
-    cfg = FitConfig.from_sources(os.path.join(run, "config.json"))
+def search(run, sets=()):
+    cfg = FitConfig.from_sources(os.path.join(run, "config.json"), list(sets))
     with open(os.path.join(run, "config.json")) as f:
         record = json.load(f)["dataset"]
     with open(os.path.join(run, "metrics.json")) as f:
@@ -58,4 +58,7 @@ def search(run):
 
 
 if __name__ == "__main__":
-    print(json.dumps([search(r) for r in sys.argv[1:]], indent=1, default=float))
+    args = sys.argv[1:]
+    sets = [args[k + 1] for k, a in enumerate(args) if a == "--set"]
+    runs = [a for k, a in enumerate(args) if a != "--set" and (k == 0 or args[k - 1] != "--set")]
+    print(json.dumps([search(r, sets) for r in runs], indent=1, default=float))
