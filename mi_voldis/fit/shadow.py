@@ -35,7 +35,12 @@ predicted_shading`). A candidate whose predicted shading exceeds the measured on
 ``MAX_SHADING_RATIO`` is no light of this scene: a grazing light that darkens the ground by c must be
 strong, and would light the object's sides far more than the photos show (on the removal family such
 lights were tens of degrees off the true one; reports/notes.md). The light is kept when the step is
-at least ``min_contrast``, pooled and in ``MIN_AGREE`` of the views that have the shadow in sight.
+at least ``min_contrast``, pooled and in ``MIN_AGREE`` of the views that have the shadow in sight, or
+when the object's shading explains its shadow (predicted / measured <= ``EXPLAINED_RATIO``) and the
+pooled step is at least ``EXPLAINED_STEP`` x ``min_contrast``: the views' agreement guards against
+dark texture that happens to line up with a candidate's edge, and so does a light that shades the
+object as deeply as its shadow asks (a light shadow's edge falls below ``min_contrast`` in many views
+while its pool holds).
 The effect masks are then each training view's shadowed pixels, grown by ``GROW`` (penumbra, the
 point cloud's coarseness).
 """
@@ -63,6 +68,8 @@ MIN_SHADING = 0.2  # a candidate light must leave the object this much brighter 
 SIDE_SHARE = 0.1  # the object's seen points on either side of the light's terminator, at least (else unjudged)
 FACING = 0.2  # |cos| between the object's normal and the light beyond which it faces the light, or away
 MAX_SHADING_RATIO = 1.5  # a light's predicted object shading over the measured one, at most (module docstring)
+EXPLAINED_RATIO = 1.1  # at most this ratio, the object's shading explains the shadow (module docstring) ...
+EXPLAINED_STEP = 0.7  # ... and the light is kept at this fraction of min_contrast, pooled, without MIN_AGREE
 MIN_RECEIVER_COS = 0.02  # receivers at a grazing angle to the light: the cosine that k divides by, at least
 GROW = 0.005  # the effect masks grow by this fraction of the image diagonal (penumbra, the cloud's coarseness)
 BIG = 3.0e38  # an empty texel in the min filter
@@ -367,8 +374,10 @@ def find_light(views, surface, min_contrast, min_agree=MIN_AGREE, max_points=200
                         p, sc = q, s
         spread, factor = spread / 2.5, np.sqrt(factor)
     t, contrast, agree, receiver_cos = sc
-    return (ShadowLight(p, t, contrast, agree, surface.shading(p), contrast >= min_contrast and agree >= min_agree,
-                        receiver_cos, surface.predicted_shading(p, contrast, receiver_cos)), (obj, radius, centre))
+    shading, predicted = surface.shading(p), surface.predicted_shading(p, contrast, receiver_cos)
+    kept = (contrast >= min_contrast and agree >= min_agree) or (
+        contrast >= EXPLAINED_STEP * min_contrast and predicted <= EXPLAINED_RATIO * shading)
+    return ShadowLight(p, t, contrast, agree, shading, kept, receiver_cos, predicted), (obj, radius, centre)
 
 
 def shadow_masks(light, occluder, cameras, masks, depths, grow):
