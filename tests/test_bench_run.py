@@ -173,3 +173,29 @@ def test_a_row_with_the_runs_own_settings_scores_its_background_as_a_refit_would
         assert refit["seconds"] != bg_seconds
         for key in ("psnr_mask", "psnr_outside", "consistency_psnr", "bg_haze_mask"):
             assert abs(reused["methods"]["volume"][key] - refit["methods"]["volume"][key]) < 1e-3, (name, key)
+
+
+def test_a_refit_never_writes_into_its_run_its_dataset_or_a_folder_it_did_not_fill(tiny_run, tiny_dataset, tmp_path):
+    """OUT as the run, inside the dataset, or a folder holding someone else's metrics.json: one line naming
+    OUT and why, and every file there stays byte for byte."""
+    import json
+    import os
+
+    import pytest
+
+    from mi_voldis.bench.strategies import main as strategies
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "metrics.json").write_text(json.dumps({"psnr": 30.0}))
+    cases = [(tiny_run, "is the run"), (os.path.join(tiny_dataset, "refit"), "is its dataset"),
+             (str(foreign), "no background refit wrote")]
+    for out, why in cases:
+        watched = out if os.path.isdir(out) else os.path.dirname(out)
+        before = {n: open(os.path.join(watched, n), "rb").read() for n in os.listdir(watched)
+                  if os.path.isfile(os.path.join(watched, n))}
+        with pytest.raises(SystemExit) as e:
+            strategies([tiny_run, "guided", out])
+        assert str(e.value).startswith(f"error: {out}: ") and why in str(e.value) and "\n" not in str(e.value)
+        after = {n: open(os.path.join(watched, n), "rb").read() for n in os.listdir(watched)
+                 if os.path.isfile(os.path.join(watched, n))}
+        assert after == before and not os.path.exists(os.path.join(tiny_dataset, "refit"))

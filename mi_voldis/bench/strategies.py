@@ -41,6 +41,26 @@ BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views
                        "bg_tv_color")
 
 
+def out_problem(out, run, dataset):
+    """Why OUT may not receive a refit's files (None if it may): it is RUN or the dataset, or inside one
+    of them, or it holds a metrics.json no refit wrote (a run's, a user's); a refit's own is replaced."""
+    real = os.path.realpath(out)
+    for name, folder in (("the run", run), ("its dataset", dataset)):
+        base = os.path.realpath(folder)
+        if real == base or real.startswith(base + os.sep):
+            return f"is {name} {folder} or inside it: give a new folder"
+    metrics = os.path.join(out, "metrics.json")
+    if os.path.exists(metrics):
+        try:
+            with open(metrics) as f:
+                ours = "strategy" in json.load(f)
+        except (OSError, ValueError):
+            ours = False
+        if not ours:
+            return "holds a metrics.json that no background refit wrote: give a new folder"
+    return None
+
+
 def refit_config(run, strategy, sets=()):
     """The settings of a background refit from ``run``: its config.json, the background phase's settings
     as today's defaults with ``bg_strategy=strategy``, then ``sets`` ("name=value")."""
@@ -161,11 +181,15 @@ def main(argv=None):
         raise SystemExit(f"error: {os.path.join(run, 'config.json')}: no dataset record (not a fitted run's)")
     ds = load_dataset(record["path"], record["format"], record["holdout"])
     fit_ds = load_dataset(argv[3], record["format"], record["holdout"]) if len(argv) > 3 else ds
-    os.makedirs(out, exist_ok=True)
+    for dataset in dict.fromkeys([record["path"]] + argv[3:4]):
+        problem = out_problem(out, run, dataset)
+        if problem:
+            raise SystemExit(f"error: {out}: {problem}")
     adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
     state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), adam)
     if state is None:
         raise SystemExit(f"error: {run}: no checkpoints/last.npz (fit it with --keep-checkpoints)")
+    os.makedirs(out, exist_ok=True)
     # the run's own background where it was fitted with these very settings (a refit is the same
     # computation: the same full field, settings and seed); else the background is fitted again
     reuse = state.phase == "done" and len(argv) == 3 and not refit and same_settings(run, cfg)
