@@ -125,9 +125,12 @@ class FitConfig(Settings):
     max_samples: int = setting(512, "cap on samples per ray", low=1)
 
     # ---- optimiser: Adam on raw grid values, exponential decay to lr * lr_final_ratio
-    lr_density: float = setting(0.1, "Adam learning rate of raw density in the full phase (grids want far larger "
+    # the full phase's rates and TV weights go together: twice the rates reach the surfaces in the steps a
+    # time budget buys, ten times the TV keeps what few views see from turning into floaters at those rates
+    # (chosen on the removal family's tuning half, held on its check half and the captures: reports/notes.md)
+    lr_density: float = setting(0.2, "Adam learning rate of raw density in the full phase (grids want far larger "
                                      "rates than NeRF MLPs)", above=0)
-    lr_color: float = setting(0.05, "Adam learning rate of raw colour in the full phase", above=0)
+    lr_color: float = setting(0.1, "Adam learning rate of raw colour in the full phase", above=0)
     lr_final_ratio: float = setting(0.1, "learning rates decay exponentially to this fraction", above=0, high=1)
     adam_beta1: float = setting(0.9, "Adam's first-moment decay", low=0, high=0.999999)
     adam_beta2: float = setting(0.99, "Adam's second-moment decay", low=0, high=0.999999)
@@ -142,8 +145,8 @@ class FitConfig(Settings):
     sh_trial_steps: int = setting(100, "'auto': colour-only steps of each degree's trial fit", low=1)
 
     # ---- regularisers (weights on per-vertex means; gradients added directly to the grids)
-    tv_density: float = setting(1e-4, "total variation of raw density in the full phase", low=0)
-    tv_color: float = setting(1e-5, "total variation of raw colour coefficients in the full phase", low=0)
+    tv_density: float = setting(1e-3, "total variation of raw density in the full phase", low=0)
+    tv_color: float = setting(1e-4, "total variation of raw colour coefficients in the full phase", low=0)
     tv_every: int = setting(4, "apply the TV gradient (scaled by this) every k steps: it costs a pass over "
                                "the whole grid", low=1)
     sparsity: float = setting(1e-5, "L1 on activated density: empty space stays empty", low=0)
