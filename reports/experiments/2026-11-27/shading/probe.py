@@ -20,16 +20,12 @@ sys.path.insert(0, os.path.join(os.path.dirname(HERE), "shadow"))
 
 import re  # noqa: E402
 
+from search import kept_run  # noqa: E402
 from search import true_light as rect_or_point  # noqa: E402
 
-from mi_voldis.data import load_dataset  # noqa: E402
 from mi_voldis.fit import shadow as sh  # noqa: E402
-from mi_voldis.fit.config import FitConfig  # noqa: E402
-from mi_voldis.fit.fields import FitInputs  # noqa: E402
 from mi_voldis.fit.hull import visual_hull  # noqa: E402
 from mi_voldis.fit.lift import training_depths  # noqa: E402
-from mi_voldis.fit.state import FitState  # noqa: E402
-from mi_voldis.optim.adam import Adam  # noqa: E402
 
 
 def true_light(dataset):
@@ -58,14 +54,8 @@ def terms(p, surface, views, obj, radius, centre, min_contrast):
 
 
 def probe(run, extra=None):
-    cfg = FitConfig.from_sources(os.path.join(run, "config.json"), [])
-    with open(os.path.join(run, "config.json")) as f:
-        record = json.load(f)["dataset"]
-    with open(os.path.join(run, "metrics.json")) as f:
-        before = (json.load(f).get("bg_prior") or {}).get("shadow")
-    ds = load_dataset(record["path"], record["format"], record["holdout"])
-    state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), Adam({}, cfg.adam_beta1, cfg.adam_beta2))
-    inputs = FitInputs.of(ds, cfg, "/nonexistent/state.npz", False)
+    record, before, inputs, state = kept_run(run)
+    ds, cfg = inputs.ds, inputs.cfg
     depth = training_depths(inputs, state, count=len(ds.train), median=True)
     masked = [v for v in ds.masked_train if v in depth]
     cams, masks, depths = ([seq[v] for v in masked] for seq in (ds.cameras, ds.masks, depth))

@@ -42,7 +42,9 @@ def angle(a, b):
     return float(np.degrees(np.arccos(np.clip(a @ b / np.linalg.norm(a) / np.linalg.norm(b), -1, 1))))
 
 
-def search(run, sets=()):
+def kept_run(run, sets=()):
+    """A fit kept with its checkpoints: its dataset record, the shadow its fit recorded, the fit's
+    inputs (dataset and settings, ``sets`` applied) and its final state."""
     cfg = FitConfig.from_sources(os.path.join(run, "config.json"), list(sets))
     with open(os.path.join(run, "config.json")) as f:
         record = json.load(f)["dataset"]
@@ -50,7 +52,11 @@ def search(run, sets=()):
         before = (json.load(f).get("bg_prior") or {}).get("shadow")
     ds = load_dataset(record["path"], record["format"], record["holdout"])
     state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), Adam({}, cfg.adam_beta1, cfg.adam_beta2))
-    inputs = FitInputs.of(ds, cfg, "/nonexistent/state.npz", False)
+    return record, before, FitInputs.of(ds, cfg, "/nonexistent/state.npz", False), state
+
+
+def search(run, sets=()):
+    record, before, inputs, state = kept_run(run, sets)
     _, now = find_shadow(inputs, state)
     truth = true_light(record["path"])
     return {"run": run, "true": truth, "before": before, "now": now,
