@@ -283,11 +283,11 @@ def calibrated(seconds, samples, steps=200):
     return SimpleNamespace(log=log, plan=None, steps_full=None, schedule=None)
 
 
-def planned(cfg, state):
+def planned(cfg, state, masks=None):
     from types import SimpleNamespace
 
     from mi_voldis.fit.train import plan_schedule
-    ds = SimpleNamespace(train=list(range(4)), size=(100, 100), masks=None)  # 0.04 Mpx: the 1.5-minute floor
+    ds = SimpleNamespace(train=list(range(4)), size=(100, 100), masks=masks)  # 0.04 Mpx: the 1.5-minute floor
     plan_schedule(SimpleNamespace(cfg=cfg, ds=ds, bank=SimpleNamespace(pixels=4 * 100 * 100)), state, None)
     return state
 
@@ -336,6 +336,25 @@ def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked():
     assert state.steps_full == 5000
 
 
+def test_a_capture_without_masks_gives_its_full_field_the_background_refits_share():
+    """The background refit's share of the budget (RESERVED) goes to the full field where no background
+    is refitted (no masks, or 'scratch', which fits both fields in the full phase): its steps grow in proportion."""
+    from mi_voldis.fit.schedule import RESERVED, RESERVED_NO_BACKGROUND
+    cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=0)
+    samples = 0.01 * cfg.reference_msps * 1e6
+    plans = {masks is not None: planned(cfg.replace(bg_strategy=strategy), calibrated(0.01, samples), masks)
+             for masks, strategy in ((None, "guided"), (["mask"], "guided"))}
+    scratch = planned(cfg.replace(bg_strategy="scratch"), calibrated(0.01, samples), ["mask"])
+    minutes = plans[False].plan["minutes"]
+    assert plans[True].plan["budget_seconds"] == pytest.approx(minutes * 60 * (1 - RESERVED))
+    assert plans[False].plan["budget_seconds"] == pytest.approx(minutes * 60 * (1 - RESERVED_NO_BACKGROUND))
+    assert scratch.plan["budget_seconds"] == plans[False].plan["budget_seconds"]
+    for masked, state in plans.items():
+        budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
+        assert state.steps_full == steps_for(stages(cfg, 64, 256), StepCost(0.01, 64), budget)
+    assert plans[False].steps_full > plans[True].steps_full * 1.15
+
+
 def test_a_budget_in_minutes_is_timed_here_and_rescaled_as_the_fit_runs():
     cfg = FitConfig().for_backend("llvm").replace(minutes=0.5, resolution=64)  # one stage: a replan times it
     slow, fast = (planned(cfg, calibrated(s, 1e5)) for s in (0.02, 0.01))
@@ -347,7 +366,7 @@ def test_a_budget_in_minutes_is_timed_here_and_rescaled_as_the_fit_runs():
     before = fast.steps_full
     replan(fast, 500)  # it now runs at a quarter of the planned speed: fewer steps ahead
     assert fast.plan["rescaled"] == [[500, fast.steps_full]]
-    assert fast.steps_full == 500 + round((cfg.minutes * 60 * 0.8 - fast.log[-1]["time"]) / 0.04) < before
+    assert fast.steps_full == 500 + round((fast.plan["budget_seconds"] - fast.log[-1]["time"]) / 0.04) < before
 
 
 def test_the_plan_is_reported_in_one_line():

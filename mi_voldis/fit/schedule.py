@@ -16,7 +16,9 @@ derived from the capture and the time budget once the first, coarse stage has ru
   step's samples, proportional to R, and its vertices, to R^2 on surfaces; the host's part is fixed
   per step, nothing on a CPU, most of a step on a GPU), with the kernels' seconds timed or costed in
   the coarse stage, leaving
-  ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation;
+  ``RESERVED`` of the budget to the background refit, the spherical-harmonic trials and the evaluation
+  where a background is refitted, and ``RESERVED_NO_BACKGROUND`` to the trials and the evaluation alone
+  where none is (no masks): the full field of such a capture takes the rest (:func:`reserved`);
 * the default budget (``minutes`` 'auto', :func:`auto_minutes`) is costed at a reference speed, not
   timed: a coarse step takes its evaluated samples (counted in the calibration steps, which depend on
   the capture alone) over ``reference_msps``, the kernels' speed on the backend's reference machine,
@@ -40,6 +42,9 @@ import numpy as np
 
 COST_EXPONENT = 1.25
 RESERVED = 0.2
+# without a background refit only the spherical-harmonic trials (100 colour-only steps of each degree) and the
+# held-out evaluation follow the full phase: a few seconds of a budget of minutes
+RESERVED_NO_BACKGROUND = 0.05
 
 
 @dataclass(frozen=True)
@@ -94,6 +99,12 @@ class StepCost:
 def backend():
     """The backend of the Mitsuba variant in use: 'cuda' or 'llvm' (scalar variants cannot fit)."""
     return "cuda" if mi.variant().startswith("cuda") else "llvm"
+
+
+def reserved(background):
+    """The share of the budget left after the full phase: ``RESERVED`` where a background is refitted
+    after it (``background``), else ``RESERVED_NO_BACKGROUND``."""
+    return RESERVED if background else RESERVED_NO_BACKGROUND
 
 
 def auto_minutes(dataset, which="llvm"):

@@ -69,7 +69,6 @@ from .hull import check_hull
 from .lift import keys_mask, lift_prior
 from .problem import FieldFit
 from .schedule import (
-    RESERVED,
     StepCost,
     auto_minutes,
     backend,
@@ -78,6 +77,7 @@ from .schedule import (
     coarse_resolution,
     memory_resolution,
     rescale,
+    reserved,
     resolution_bounds,
     schedule_of,
     stages,
@@ -314,9 +314,10 @@ def plan_schedule(inputs, state, integrator):
         else:  # this machine's wall clock, re-timed as the fit runs (:func:`replan`)
             cost = StepCost.timed(float(np.median([r["step_seconds"] for r in rows])), coarse, host)
             spent = state.log[-1]["time"] if state.log else 0.0
-        budget = minutes * 60.0 * (1.0 - RESERVED) - spent
+        full_share = 1.0 - reserved(refits_background(inputs))
+        budget = minutes * 60.0 * full_share - spent
         state.plan.update(minutes=float(minutes), coarse_step_seconds=float(cost.at(coarse)), host_ms=cfg.host_ms,
-                          budget_seconds=minutes * 60.0 * (1.0 - RESERVED))
+                          budget_seconds=minutes * 60.0 * full_share)
         if survey is not None and survey["surface_cells"]:
             bounds = resolution_bounds(cfg, cost, budget, survey, inputs.bank.pixels, refits_background(inputs))
             state.plan.update(resolution_bounds=bounds, affordable_resolution=min(bounds.values()))
