@@ -14,6 +14,7 @@ from ..optim.parameters import PackedParameters
 from ..regularizers import sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
 from .fields import fit_integrator, memory_bound, occupancy_resolution, occupancy_sigma, refine
+from .observed import view_rate_scale
 from .schedule import REPLAN_EVERY, capped, resolution_at
 
 
@@ -35,13 +36,15 @@ class FieldFit:
     """One fitting phase: the fields of ``roles`` fitted through ``layers`` to rays of ``bank``
     (``pool``: flat pixel indices to draw from), their updates masked to ``hull`` (a Float per stored
     vertex) when given, the density's to ``density_hull`` if given too; ``schedule``: follow the
-    resolution schedule and start empty-space skipping."""
+    resolution schedule and start empty-space skipping; ``view_rates``: the learning rates per brick by
+    the training views that observe it (``lr_views``, :mod:`mi_voldis.fit.observed`)."""
 
     def __init__(self, inputs, state, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
-                 rates=None, tv=None, fit_exposure=False, prior=None, density_hull=None):
+                 rates=None, tv=None, fit_exposure=False, prior=None, density_hull=None, view_rates=False):
         self.inputs, self.state, self.roles, self.layers, self.bank = inputs, state, roles, layers, bank
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
         self.density_hull = density_hull
+        self.view_rates = view_rates and inputs.cfg.lr_views > 0
         self.prior = prior  # (RayBank, pool): the guided background's 2D colour prior (mi_voldis.fit.guide)
         self.fit_exposure = fit_exposure and state.exposure is not None
         self.adam = state.adam if adam is None else adam
@@ -59,8 +62,13 @@ class FieldFit:
         exactly what it skipped before the checkpoint)."""
         self.integrator = fit_integrator(self.inputs, self.state)
         self.params = PackedParameters({r: self.integrator.fields[r] for r in self.roles})
+        cameras = [self.inputs.ds.cameras[v] for v in self.inputs.ds.train]
         for r in self.roles:
             self.adam.lrs[f"{r}.packed"] = self.params.per_slot(r, *self.rates)
+            self.adam.scales.pop(f"{r}.packed", None)
+            if self.view_rates and not self.final_stage(r):  # the lattice may have changed: views counted anew
+                self.adam.scales[f"{r}.packed"] = view_rate_scale(self.inputs.space, self.state.fields[r], cameras,
+                                                                   self.inputs.cfg.lr_views)
         if self.fit_exposure:
             self.params["exposure"] = self.state.exposure
             self.adam.lrs["exposure"] = self.inputs.cfg.exposure_lr
@@ -70,6 +78,13 @@ class FieldFit:
             self.integrator.use_occupancy(self.state.occupancy)
         elif self.state.occupancy_on:
             self.update_occupancy()
+
+    def final_stage(self, role):
+        """Whether the field of ``role`` is at the planned schedule's last resolution and ``lr_views_final``
+        is off (the per-brick rates then stop)."""
+        state = self.state
+        return (not self.inputs.cfg.lr_views_final and state.steps_full is not None and
+                max(state.fields[role].shape) >= state.schedule[-1][1])
 
     def update_occupancy(self):
         extra = self.state.hull_points if self.hull is not None else None

@@ -220,7 +220,7 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
         state.schedule, state.steps_full = cfg.resolution_schedule, cfg.steps_full
     if state.schedule is None:
         state.schedule = [[0, coarse_resolution(cfg)]]  # the coarse stage, until planned
-    problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True)
+    problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True, view_rates=True)
     problem.on_stage = lambda step: replan(state, step)
     eval_fn = held_out_psnr(inputs, problem)
     common = dict(log=state.log, checkpoint=checkpoint(problem), checkpoint_every=cfg.checkpoint_every, eval_fn=eval_fn,

@@ -7,7 +7,9 @@ The state (m, v, t) is plain arrays so that checkpoints can store and restore it
 are tensors or flat arrays; a learning rate is a number, or a list of rates applied periodically
 along the flat array (one per channel of an interleaved grid, see :mod:`mi_voldis.grid`).
 ``warmup``: the learning rate ramps up linearly over this many steps after a (re)start, so that the
-first, sign-like Adam steps after a grid is resampled do not jolt it.
+first, sign-like Adam steps after a grid is resampled do not jolt it. ``scales[key]``, where set: a Float
+as wide as the parameter that multiplies its step element by element (learning rates per vertex:
+Adam's step is invariant to the scale of a gradient, so scaling the gradient would not do).
 """
 import drjit as dr
 import mitsuba as mi
@@ -21,6 +23,7 @@ class Adam:
         self.lrs = dict(lrs)
         self.beta1, self.beta2, self.eps, self.warmup = beta1, beta2, eps, warmup
         self.m, self.v, self.t = {}, {}, {}
+        self.scales = {}  # key -> Float: per-element factors on the step (they follow the lattice, not the moments)
 
     def reset(self, key=None):
         """Forget the moments (of one parameter, or all): e.g. after a grid is resampled."""
@@ -56,6 +59,8 @@ class Adam:
                 step = dr.gather(mi.Float, from_numpy(mi.Float, lr), slot) * step
             else:
                 step = lr * step
+            if key in self.scales:
+                step = self.scales[key] * step
             update = self.m[key] * (step / (dr.sqrt(self.v[key]) + eps))
             if isinstance(x, mi.TensorXf):
                 params[key] = mi.TensorXf(dr.detach(x.array) - update, x.shape)

@@ -1,0 +1,58 @@
+"""How many training views see each brick of a field, and the learning rates that follow (DVGO's
+per-voxel learning rates).
+
+A brick is *observed* by a training view when its centre projects into the view's image in front of the
+camera (its frustum; occlusion is not tested). With ``lr_views`` p > 0 every vertex of a brick observed
+by n views steps at (n / n_max)^p times the phase's learning rates, n_max the most views any brick of
+the field has. What few views see is constrained along few directions: the density there can sit
+anywhere along their rays, which is where floaters grow; at a lower rate the TV and sparsity priors
+hold it longer, while what many views see fits at the full rate. Adam's step does not change with the
+scale of a gradient, so the scale multiplies the step itself (:attr:`mi_voldis.optim.adam.Adam.scales`).
+"""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..cameras import DevicePoints
+from ..device import from_numpy
+
+
+def brick_centres(field):
+    """Scene-space centres (n, 3) of the allocated bricks of ``field`` (a FieldState), in slot order
+    1..n: the middle of each brick's vertices that lie inside the lattice."""
+    layout = field.layout
+    b, top = layout.brick, np.array(layout.shape) - 1
+    lo = layout.brick_coords() * b
+    centre = (lo + np.minimum(lo + b - 1, top)) / 2.0
+    local = centre / np.maximum(top, 1)
+    m = field.to_world
+    return local @ m[:3, :3].T + m[:3, 3]
+
+
+def brick_views(space, field, cameras):
+    """Per slot of ``field`` (NumPy, the empty slot 0 included as 0): how many of ``cameras`` have the
+    brick's centre in their image, in front of them."""
+    centres = brick_centres(field)
+    counts = np.zeros(len(centres) + 1)
+    if len(centres) == 0:
+        return counts
+    at, n = DevicePoints(space.to_world_np(centres)), dr.zeros(mi.Float, len(centres))
+    for cam in cameras:
+        _, ok = at.pixel_of(cam)
+        n += dr.select(ok, 1.0, 0.0)
+        dr.eval(n)
+    counts[1:] = n.numpy()
+    return counts
+
+
+def view_rate_scale(space, field, cameras, power):
+    """Float per packed value of ``field``: (n / n_max)^``power`` for the values of every vertex of a
+    brick observed by n of ``cameras`` (:func:`brick_views`), 0 for the empty brick and for bricks
+    no camera observes."""
+    counts = brick_views(space, field, cameras)
+    top = counts.max()
+    scale = (counts / top) ** power if top > 0 else np.zeros_like(counts)
+    scale[0] = 0.0
+    per_slot = from_numpy(mi.Float, scale.astype(np.float32))
+    values = dr.arange(mi.UInt32, field.layout.slots * field.layout.vertices_per_brick * field.width)
+    return dr.gather(mi.Float, per_slot, values // (field.layout.vertices_per_brick * field.width))
