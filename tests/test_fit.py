@@ -180,6 +180,7 @@ def test_render_script_from_dataset_cameras(tiny_run, tmp_path):
     ("space=\"nowhere\"", 'space must be one of "auto", "contract", "world", "ndc"'),
     ("distortion=-0.1", "distortion must be a number >= 0"),
     ("lr_views=-1", "lr_views must be a number >= 0, got -1"),
+    ("lr_views_quantile=0", "lr_views_quantile must be a number > 0 and <= 1, got 0"),
     ("sh_degree=2", 'sh_degree must be one of "auto", 0, 1, got 2'),
     ("bg_strategy=\"magic\"", 'bg_strategy must be one of "lift", "clear", "harmonic", "guided", "scratch"'),
 ])

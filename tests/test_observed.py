@@ -44,6 +44,14 @@ def test_views_count_the_cameras_whose_image_holds_the_brick_and_scale_the_rates
         per_vertex = scale.reshape(-1, 8 ** 3 * f.width)
         assert np.all(per_vertex == per_vertex[:, :1])  # one value per brick
         np.testing.assert_allclose(per_vertex[:, 0], np.r_[0.0, (counts[1:] / 2) ** power], rtol=1e-6)
+    # n_ref the median count (1: six bricks seen once, two twice): no brick is seen by fewer, all step at 1
+    median = np.array(view_rate_scale(space, f, [wide, behind, narrow], 1.0, quantile=0.5)).reshape(9, -1)[:, 0]
+    np.testing.assert_array_equal(median, np.r_[0.0, np.ones(8)])
+    # n_ref the 80% quantile, between 1 and 2: the bricks seen once step at 1 / n_ref
+    ref = np.quantile(counts[1:], 0.8)
+    high = np.array(view_rate_scale(space, f, [wide, behind, narrow], 1.0, quantile=0.8)).reshape(9, -1)[:, 0]
+    np.testing.assert_allclose(high, np.r_[0.0, np.minimum(counts[1:] / ref, 1.0)], rtol=1e-6)
+    assert 1 < ref < 2 and high.min() < 1
 
 
 def test_no_camera_observes_nothing():

@@ -58,7 +58,7 @@ class FitConfig(Settings):
     # no annotation): plans before host_ms had no host term; background refits before bg_lr_* / bg_tv_*
     # stepped with the then default rates and TV weights
     ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5,
-             "lr_views": 0.0, "lr_views_final": True}
+             "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -132,10 +132,13 @@ class FitConfig(Settings):
     lr_density: float = setting(0.2, "Adam learning rate of raw density in the full phase (grids want far larger "
                                      "rates than NeRF MLPs)", above=0)
     lr_color: float = setting(0.1, "Adam learning rate of raw colour in the full phase", above=0)
-    lr_views: float = setting(0.0, "the full phase's learning rates per brick times (n / n_max)^lr_views, n the "
-                                   "training views whose image holds the brick (DVGO's per-voxel rates: what few "
-                                   "views see fits slower, floaters have less room; mi_voldis.fit.observed); 0: "
-                                   "the same rates everywhere", low=0)
+    lr_views: float = setting(0.0, "the full phase's learning rates per brick times min(1, n / n_ref)^lr_views, n "
+                                   "the training views whose image holds the brick (DVGO's per-voxel rates: what "
+                                   "few views see fits slower, floaters have less room; mi_voldis.fit.observed); "
+                                   "0: the same rates everywhere", low=0)
+    lr_views_quantile: float = setting(1.0, "with lr_views, n_ref is this quantile of the bricks' view counts (1: the "
+                                            "largest; 0.5: the median, so only the bricks fewer views see than "
+                                            "most step slower)", above=0, high=1)
     lr_views_final: bool = setting(True, "with lr_views, the last stage (the final resolution) steps at the per-brick "
                                          "rates too (false: at the phase's rates everywhere, as DVGO's fine stage; "
                                          "the carving at each stage's start has removed the bricks that the lower "

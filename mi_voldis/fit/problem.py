@@ -68,7 +68,8 @@ class FieldFit:
             self.adam.scales.pop(f"{r}.packed", None)
             if self.view_rates and not self.final_stage(r):  # the lattice may have changed: views counted anew
                 self.adam.scales[f"{r}.packed"] = view_rate_scale(self.inputs.space, self.state.fields[r], cameras,
-                                                                   self.inputs.cfg.lr_views)
+                                                                   self.inputs.cfg.lr_views,
+                                                                   self.inputs.cfg.lr_views_quantile)
         if self.fit_exposure:
             self.params["exposure"] = self.state.exposure
             self.adam.lrs["exposure"] = self.inputs.cfg.exposure_lr
