@@ -54,6 +54,18 @@ def test_views_count_the_cameras_whose_image_holds_the_brick_and_scale_the_rates
     assert 1 < ref < 2 and high.min() < 1
 
 
+def test_the_quantile_is_of_the_observed_bricks():
+    """Bricks no camera observes do not pull n_ref to 0: the median of the observed ones decides."""
+    f, space = field_over_unit_box(), SceneSpace("world")
+    right = -1 + 2 * 11.5 / 15
+    narrow = Camera(look_at((right, right, 6.0), (right, right, 0.0)), fov_x=8.0, width=32, height=32)
+    wide_half = Camera(look_at((0.0, right, 6.0), (0.0, right, 0.0)), fov_x=30.0, width=32, height=8)  # the +y bricks
+    counts = brick_views(space, f, [narrow, wide_half])[1:]
+    assert (counts == 0).sum() == 4 and sorted(counts[counts > 0]) == [1, 1, 2, 2]
+    scale = np.array(view_rate_scale(space, f, [narrow, wide_half], 1.0, quantile=0.5)).reshape(9, -1)[1:, 0]
+    np.testing.assert_allclose(scale, np.minimum(counts / 1.5, 1.0), rtol=1e-6)  # the median of 1, 1, 2, 2
+
+
 def test_no_camera_observes_nothing():
     f = field_over_unit_box()
     away = Camera(look_at((0.0, 0.0, 6.0), (0.0, 0.0, 12.0)), fov_x=30.0, width=8, height=8)

@@ -4,7 +4,7 @@ per-voxel learning rates).
 A brick is *observed* by a training view when its centre projects into the view's image in front of the
 camera (its frustum; occlusion is not tested). With ``lr_views`` p > 0 every vertex of a brick observed
 by n views steps at min(1, n / n_ref)^p times the phase's learning rates, n_ref the ``lr_views_quantile``
-quantile of the allocated bricks' counts (1: the most views any brick has). What few views see is
+quantile of the counts of the bricks some view observes (1: the most views any brick has). What few views see is
 constrained along few directions: the density there can sit anywhere along their rays, which is where
 floaters grow; at a lower rate the TV and sparsity priors hold it longer, while what many views see fits
 at the full rate. Adam's step does not change with the scale of a gradient, so the scale multiplies the
@@ -48,10 +48,12 @@ def brick_views(space, field, cameras):
 
 def view_rate_scale(space, field, cameras, power, quantile=1.0):
     """Float per packed value of ``field``: min(1, n / n_ref)^``power`` for the values of every vertex of
-    a brick observed by n of ``cameras`` (:func:`brick_views`), n_ref the ``quantile`` of the allocated
-    bricks' counts (1: their largest); 0 for the empty brick and for bricks no camera observes."""
+    a brick observed by n of ``cameras`` (:func:`brick_views`), n_ref the ``quantile`` of the counts of
+    the bricks some camera observes (1: their largest); 0 for the empty brick and for bricks no camera
+    observes."""
     counts = brick_views(space, field, cameras)
-    ref = float(np.quantile(counts[1:], quantile)) if len(counts) > 1 else 0.0
+    seen = counts[1:][counts[1:] > 0]  # bricks outside every frustum (under the floor, behind the rig) step at 0
+    ref = float(np.quantile(seen, quantile)) if len(seen) else 0.0
     scale = np.minimum(counts / ref, 1.0) ** power if ref > 0 else np.zeros_like(counts)
     scale[0] = 0.0
     per_slot = from_numpy(mi.Float, scale.astype(np.float32))
