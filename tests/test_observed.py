@@ -105,3 +105,18 @@ def test_the_per_brick_rates_stop_at_the_last_stage_only_when_asked():
 
     assert final(256, 3000, False) and not final(128, 3000, False) and not final(64, None, False)
     assert not final(256, 3000, True)
+
+
+def test_adam_growth_factors_slow_only_the_steps_that_increase_an_element():
+    g = np.array([0.3, -2.0, 5.0, -1e-3], np.float32)  # x moves against g: down, up, down, up
+    final = {}
+    for growth in (None, [0.5, 0.5, 0.0, 0.25]):
+        adam = Adam({"x": 0.1})
+        if growth is not None:
+            adam.growth["x"] = mi.Float(growth)
+        params = {"x": mi.Float(np.zeros(4, np.float32))}
+        for _ in range(3):
+            adam.step(params, {"x": mi.Float(g)})
+        final[growth is None] = np.array(params["x"])
+    np.testing.assert_allclose(final[False], final[True] * np.array([1.0, 0.5, 1.0, 0.25]), rtol=1e-5)
+    assert final[True][1] > 0 and final[True][0] < 0

@@ -58,7 +58,8 @@ class FitConfig(Settings):
     # no annotation): plans before host_ms had no host term; background refits before bg_lr_* / bg_tv_*
     # stepped with the then default rates and TV weights
     ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5,
-             "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0}
+             "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
+             "lr_views_growth": False}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -139,6 +140,9 @@ class FitConfig(Settings):
     lr_views_quantile: float = setting(1.0, "with lr_views, n_ref is this quantile of the bricks' view counts (1: the "
                                             "largest; 0.5: the median, so only the bricks fewer views see than "
                                             "most step slower)", above=0, high=1)
+    lr_views_growth: bool = setting(False, "with lr_views, the factor slows only the density's growth (the colour and "
+                                           "the density's decrease step at the full rate everywhere): a surface few "
+                                           "views see still takes its colour, a floater before it grows slower")
     lr_views_final: bool = setting(True, "with lr_views, the last stage (the final resolution) steps at the per-brick "
                                          "rates too (false: at the phase's rates everywhere, as DVGO's fine stage; "
                                          "the carving at each stage's start has removed the bricks that the lower "

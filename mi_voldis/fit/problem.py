@@ -66,10 +66,15 @@ class FieldFit:
         for r in self.roles:
             self.adam.lrs[f"{r}.packed"] = self.params.per_slot(r, *self.rates)
             self.adam.scales.pop(f"{r}.packed", None)
+            self.adam.growth.pop(f"{r}.packed", None)
             if self.view_rates and not self.final_stage(r):  # the lattice may have changed: views counted anew
-                self.adam.scales[f"{r}.packed"] = view_rate_scale(self.inputs.space, self.state.fields[r], cameras,
-                                                                   self.inputs.cfg.lr_views,
-                                                                   self.inputs.cfg.lr_views_quantile)
+                cfg, f = self.inputs.cfg, self.state.fields[r]
+                scale = view_rate_scale(self.inputs.space, f, cameras, cfg.lr_views, cfg.lr_views_quantile)
+                if cfg.lr_views_growth:  # the density channel's growth only
+                    channel = dr.arange(mi.UInt32, dr.width(scale)) % f.width
+                    self.adam.growth[f"{r}.packed"] = dr.select(channel == 0, scale, 1.0)
+                else:
+                    self.adam.scales[f"{r}.packed"] = scale
         if self.fit_exposure:
             self.params["exposure"] = self.state.exposure
             self.adam.lrs["exposure"] = self.inputs.cfg.exposure_lr

@@ -9,7 +9,8 @@ along the flat array (one per channel of an interleaved grid, see :mod:`mi_voldi
 ``warmup``: the learning rate ramps up linearly over this many steps after a (re)start, so that the
 first, sign-like Adam steps after a grid is resampled do not jolt it. ``scales[key]``, where set: a Float
 as wide as the parameter that multiplies its step element by element (learning rates per vertex:
-Adam's step is invariant to the scale of a gradient, so scaling the gradient would not do).
+Adam's step is invariant to the scale of a gradient, so scaling the gradient would not do);
+``growth[key]``, where set: the same, but only on the steps that increase an element.
 """
 import drjit as dr
 import mitsuba as mi
@@ -24,6 +25,7 @@ class Adam:
         self.beta1, self.beta2, self.eps, self.warmup = beta1, beta2, eps, warmup
         self.m, self.v, self.t = {}, {}, {}
         self.scales = {}  # key -> Float: per-element factors on the step (they follow the lattice, not the moments)
+        self.growth = {}  # key -> Float: per-element factors on the steps that increase an element
 
     def reset(self, key=None):
         """Forget the moments (of one parameter, or all): e.g. after a grid is resampled."""
@@ -62,6 +64,8 @@ class Adam:
             if key in self.scales:
                 step = self.scales[key] * step
             update = self.m[key] * (step / (dr.sqrt(self.v[key]) + eps))
+            if key in self.growth:  # x - update grows where update < 0
+                update = dr.select(update < 0.0, update * self.growth[key], update)
             if isinstance(x, mi.TensorXf):
                 params[key] = mi.TensorXf(dr.detach(x.array) - update, x.shape)
             else:
