@@ -316,6 +316,31 @@ def test_the_default_plan_is_costed_at_the_reference_speed_whatever_the_machine(
     assert (state.schedule, state.steps_full) == before and "rescaled" not in state.plan
 
 
+def test_a_default_plan_capped_by_memory_spends_the_seconds_it_saves_on_steps_at_the_cap():
+    """Memory stops the last stage of a default plan below its resolution: the seconds the plan gave the
+    steps ahead buy more steps at the capped resolution (cost R^COST_EXPONENT a step), those before the
+    cap unchanged, as far as the budget goes; the plan's own cost (:func:`plan_cost`) is the one it was
+    made with."""
+    from mi_voldis.fit.schedule import cost_ahead, plan_cost, rescale_after_cap
+    cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=500)
+    state = planned(cfg, calibrated(0.01, 0.01 * cfg.reference_msps * 1e6))
+    cost = plan_cost(state.plan, state.schedule[0][1])
+    assert cost.at([64, 256]) == pytest.approx(StepCost(0.01, 64).at([64, 256]))
+    (start, last), end, budget = state.schedule[-1], state.steps_full, state.plan["budget_seconds"]
+    schedule, steps = rescale_after_cap(state.schedule, end, start, 192, cost, budget)
+    assert schedule == state.schedule[:-1] + [[start, 192]]
+    assert steps - start == round((end - start) * (last / 192) ** COST_EXPONENT)  # analytic, host 0
+    assert cost_ahead(schedule, steps, start, cost) == pytest.approx(cost_ahead(state.schedule, end, start, cost),
+                                                                     rel=1e-3)
+    # capped at the resolution before it, the last stage merges into that one and still fills the seconds
+    prev = state.schedule[-2][1]
+    schedule, steps = rescale_after_cap(state.schedule, end, start, prev, cost, budget)
+    assert schedule == state.schedule[:-1] and steps - start == round((end - start) * (last / prev) ** COST_EXPONENT)
+    # a plan held at min_steps over its budget keeps its steps: the cap saves seconds it never had
+    schedule, steps = rescale_after_cap(state.schedule, end, start, 192, cost, budget / 10)
+    assert schedule == state.schedule[:-1] + [[start, 192]] and steps == end
+
+
 def test_the_default_resolution_is_the_finest_the_reference_speed_affords(monkeypatch):
     import mi_voldis.fit.train as train
     monkeypatch.setattr(train, "capture_survey", lambda *a: SURVEY)  # the capture asks for more than it buys

@@ -15,7 +15,7 @@ from ..regularizers import sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
 from .fields import fit_integrator, memory_bound, occupancy_resolution, occupancy_sigma, refine
 from .observed import view_rate_scale
-from .schedule import REPLAN_EVERY, capped, resolution_at
+from .schedule import REPLAN_EVERY, capped, plan_cost, rescale_after_cap, resolution_at
 
 
 def backdrop(ds, rng, n):
@@ -116,11 +116,18 @@ class FieldFit:
             planned = resolution_at(state.schedule, step)
             used = refine(self.inputs, state, self.integrator, self.roles, planned, memory_bound(self.inputs, state))
             if used < planned:  # the carved lattice would outgrow max_memory_gib: this stage and later ones stop at it
-                state.schedule = capped(state.schedule, used, step)
+                if "reference_msps" in state.plan:  # the default plan: the seconds saved buy steps at the cap
+                    state.schedule, state.steps_full = rescale_after_cap(
+                        state.schedule, state.steps_full, step, used, plan_cost(state.plan, state.schedule[0][1]),
+                        state.plan["budget_seconds"])
+                    state.plan.setdefault("rescaled", []).append([step, state.steps_full])
+                else:  # a wall-clock budget: the next replan (schedule.rescale) fills it
+                    state.schedule = capped(state.schedule, used, step)
                 state.plan.setdefault("memory_caps", []).append([step, planned, used])
                 if self.inputs.progress:
                     print(f"memory: the stage from step {step} stops at {used} (planned {planned}): its carved grid "
-                          f"would pass max_memory_gib {cfg.max_memory_gib:g}", file=sys.stderr)
+                          f"would pass max_memory_gib {cfg.max_memory_gib:g}; {state.steps_full} steps in all",
+                          file=sys.stderr)
             self.adam.reset()
             self.rebuild()
         start = self.schedule and cfg.occupancy_at_step and step >= cfg.occupancy_at_step and not state.occupancy_on

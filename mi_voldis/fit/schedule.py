@@ -204,11 +204,13 @@ def stages(cfg, coarse, final):
 BASE_BYTES = 400 * 2 ** 20
 BYTES_PER_PIXEL = 30
 BYTES_PER_VERTEX = {False: 320, True: 480}  # without / with the background refit
-# Stored vertices per effective surface cell of the final grid, for the plan (fern 84 at 304^3, the statue 150 at
-# 576^3: bricks of 8^3 vertices around thin or folded surfaces); every stage then counts its own vertices before it
-# allocates them (:func:`mi_voldis.fit.fields.fitting_resolution`), so a guess too low costs no memory, only a plan
-# whose last stage is capped.
-VERTICES_PER_SURFACE_CELL = 100
+# Stored vertices per effective surface cell of the final grid, for the plan: fern 55-66 (416^3-528^3), horns
+# 81-87 (432^3-544^3), the removal family 55-195, the statue 150, garden 286 (reports/notes.md). The plan takes
+# about the lowest: every stage then counts its own vertices before it allocates them
+# (:func:`mi_voldis.fit.fields.fitting_resolution`) and stops at the finest resolution within the bound, and the
+# steps it then has to spare go to that stage (:func:`rescale_after_cap`), so a guess too low costs neither memory
+# nor time, where one too high keeps a capture on a coarser grid than its memory holds.
+VERTICES_PER_SURFACE_CELL = 64
 
 
 def memory_scale(sh_degree):
@@ -300,21 +302,55 @@ def schedule_of(plan_stages, steps, first):
 REPLAN_EVERY = 100  # steps between rescalings within a stage (and at every stage start)
 
 
+def _ahead(schedule, steps_full, step):
+    """What is ahead of ``step``: the index of the stage holding it, and the resolutions and step counts of
+    the rest of that stage and of the stages after it."""
+    k = max(i for i, (start, _) in enumerate(schedule) if start <= step)
+    starts = [step] + [start for start, _ in schedule[k + 1:]]
+    levels = np.array([r for _, r in schedule[k:]], np.float64)
+    return k, levels, np.diff(starts + [steps_full]).astype(np.float64)
+
+
+def cost_ahead(schedule, steps_full, step, cost):
+    """Seconds the steps from ``step`` to ``steps_full`` of ``schedule`` cost, a step at resolution R
+    costing ``cost.at(R)`` (:class:`StepCost`)."""
+    _, levels, lengths = _ahead(schedule, steps_full, step)
+    return float(np.dot(lengths, cost.at(levels)))
+
+
 def rescale(schedule, steps_full, step, cost, budget_left):
     """(schedule, steps_full) with the steps from ``step`` on stretched or shrunk in proportion so that
     their cost fills ``budget_left`` seconds, a step at resolution R costing ``cost.at(R)``
     (:class:`StepCost`, timed on the stage run last). What is ahead is the rest of the stage holding
     ``step`` and the stages after it; each keeps at least one step; the steps before ``step`` are
     unchanged."""
-    k = max(i for i, (start, _) in enumerate(schedule) if start <= step)
-    starts = [step] + [start for start, _ in schedule[k + 1:]]
-    levels = np.array([r for _, r in schedule[k:]], np.float64)
-    lengths = np.diff(starts + [steps_full]).astype(np.float64)
+    k, levels, lengths = _ahead(schedule, steps_full, step)
     factor = max(budget_left, 0.0) / float(np.dot(lengths, cost.at(levels)))
     lengths = np.maximum(1, np.round(lengths * factor)).astype(int)
     new_starts = step + np.concatenate([[0], np.cumsum(lengths)[:-1]])
     ahead = [[int(s), r] for s, (_, r) in zip(new_starts[1:], schedule[k + 1:])]
     return schedule[:k + 1] + ahead, int(step + lengths.sum())
+
+
+def rescale_after_cap(schedule, steps_full, step, cap, cost, budget):
+    """(schedule, steps_full) once memory stops the stage starting at ``step`` and those after it at
+    ``cap`` (:func:`capped`): the seconds the plan gave the steps ahead, at the resolutions it planned,
+    now buy steps at the capped ones (:func:`rescale`), as far as the phase's ``budget`` (seconds, all
+    its steps) goes: a plan held at ``min_steps`` over its budget gets no more steps, and none ever gets
+    fewer. Costed with ``cost`` (the plan's reference cost, :func:`plan_cost`), it depends on the plan
+    alone: a resumed fit caps and rescales where an uninterrupted one did."""
+    spent = cost_ahead(schedule, steps_full, 0, cost) - cost_ahead(schedule, steps_full, step, cost)
+    left = min(cost_ahead(schedule, steps_full, step, cost), budget - spent)
+    out = capped(schedule, cap, step)
+    ahead, end = rescale(out, steps_full, step, cost, left)
+    return (ahead, end) if end > steps_full else (out, steps_full)
+
+
+def plan_cost(plan, coarse):
+    """The :class:`StepCost` a default plan (costed at the reference speed: ``plan`` holds
+    ``coarse_step_seconds`` and ``host_ms``) was made with, its coarse stage at ``coarse``."""
+    host = plan.get("host_ms", 0.0) / 1e3
+    return StepCost(plan["coarse_step_seconds"] - host, coarse, host)
 
 
 def capped(schedule, cap, step=0):
