@@ -248,6 +248,41 @@ def test_a_fit_whose_carved_grid_would_outgrow_the_memory_stays_on_the_grid_it_h
     assert tuple(metrics["grid"]["full"]) == shape_for(np.array(box["lo"]), np.array(box["hi"]), 8)
 
 
+def test_the_sample_bound_stops_refining_once_more_than_a_share_of_rays_reach_the_cap():
+    """Rays at the cap beyond SAMPLE_CUT_SHARE keep the current grid; at or under it, or with rays that
+    evaluate nothing, nothing is bound."""
+    from mi_voldis.fit.fields import SAMPLE_CUT_SHARE, sample_bound
+    n = 10000
+    cut = int(n * SAMPLE_CUT_SHARE)
+    over = np.concatenate([np.full(cut + 1, 512.0), np.full(n - cut - 1, 100.0)])
+    within = np.concatenate([np.full(cut, 512.0), np.full(n - cut, 100.0)])
+    assert sample_bound(64, over, 512) == 64
+    assert sample_bound(64, within, 512) > 10 ** 6
+    assert sample_bound(64, over, 513) > 10 ** 6  # the cap, not the count, decides
+    assert sample_bound(64, np.zeros(10), 512) > 10 ** 6
+
+
+def test_a_contracted_fit_whose_rays_would_pass_the_sample_cap_stays_on_the_grid_it_has(tiny_dataset, tmp_path):
+    """With max_samples 1, what nearly every ray of the coarse grid already evaluates, a finer grid would cut
+    them short: the plan stays on the coarse grid and records each cap as [step, planned, used]."""
+    from mi_voldis.fit.run import run_fit
+    sets = ["steps_full=90", "calibration_steps=40", "lr_density=0.5", "density_init_alpha=0.05", "coarse_resolution=8",
+            "batch_rays=512", "steps_bg=2", "sh_degree=0", "eval_every=1000", "occupancy_at_step=10", "stages=3",
+            "stage_starts=[0.4,0.7]", "space=contract", "max_samples=1"]
+    out = str(tmp_path / "run")
+    run_fit(tiny_dataset, out, FitConfig.from_sources(None, sets), progress=False)
+    metrics = json.load(open(os.path.join(out, "metrics.json")))
+    plan = metrics["schedule"]["plan"]
+    assert metrics["space"] == "contract" and plan["final_resolution"] > 8
+    assert metrics["schedule"]["stages"] == [[0, 8]] and "memory_caps" not in plan
+    assert [c[2] for c in plan["samples_caps"]] == [8] and plan["samples_caps"][0][1] > 8
+    # the same fit with the march's default cap refines past the coarse grid
+    out = str(tmp_path / "run512")
+    run_fit(tiny_dataset, out, FitConfig.from_sources(None, sets[:-1]), progress=False)
+    metrics = json.load(open(os.path.join(out, "metrics.json")))
+    assert metrics["schedule"]["stages"][-1][1] > 8 and "samples_caps" not in metrics["schedule"]["plan"]
+
+
 @pytest.mark.parametrize("steps", [5, 17])
 def test_the_optimisation_loop_follows_an_end_that_moves(steps):
     import mitsuba as mi

@@ -19,6 +19,9 @@ from ..transforms import apply_point
 from .config import FitConfig
 from .schedule import affordable_vertices, coarse_resolution, finest_resolution
 
+# the share of traced rays cut short by the march's sample cap at which a fit refines no further (sample_bound)
+SAMPLE_CUT_SHARE = 0.01
+
 
 @dataclass(frozen=True)
 class FitInputs:
@@ -57,29 +60,53 @@ def init_fields(inputs, state, roles, sh_degree):
         state.fields[r] = new_field(state.lo, state.hi, res, sh_degree, raw, scale, cfg.brick)
 
 
-def refine(inputs, state, integrator, roles, resolution, max_vertices=None):
+def refine(inputs, state, integrator, roles, resolution, max_vertices=None, max_samples=None):
     """Carve the fields of ``roles`` to the bricks where training rays end (some sample of some ray gets
     weight ``carve_weight``; grown by a brick) and resample them onto a lattice of ``resolution``
     vertices along the box's longest side, or with ``max_vertices`` the finest one (in steps of 16, not
     below the current lattice) whose carved fields hold no more stored vertices together
-    (:func:`fitting_resolution`). Returns the resolution used."""
-    keeps = {}
+    (:func:`fitting_resolution`), and with ``max_samples`` in curved (contracted) space no finer than
+    :func:`sample_bound` allows.
+    Returns the resolution used and the bound that chose it where one did ('memory', 'samples', None)."""
+    keeps, evaluated = {}, []
     for r in roles:
         f = state.fields[r]
         if not inputs.cfg.carve:
             keeps[r] = None
             continue
-        weights = ray_weights(inputs, integrator, r)
+        weights, counts = ray_weights(inputs, integrator, r)
+        evaluated.append(counts)
         needed = weights > inputs.cfg.carve_weight
         if not needed.any():  # a field still nearly transparent everywhere: keep its strongest bricks
             needed = weights >= 0.5 * weights.max() if weights.max() > 0 else np.ones(weights.shape, bool)
         keeps[r] = carve(f, needed)
+    bound = None
+    current = max(max(state.fields[r].shape) for r in roles)
+    if max_samples is not None and evaluated and inputs.space.is_curved:
+        limit = sample_bound(current, np.concatenate(evaluated), max_samples)
+        if limit < resolution:
+            resolution, bound = limit, "samples"
     if max_vertices is not None:
-        resolution = fitting_resolution(state, keeps, resolution, max_vertices)
+        used = fitting_resolution(state, keeps, resolution, max_vertices)
+        resolution, bound = (used, "memory") if used < resolution else (resolution, bound)
     for r in roles:
         state.fields[r] = resample(state.fields[r], shape_for(state.lo, state.hi, resolution), keeps[r])
     dr.flush_malloc_cache()  # the coarser lattice's arrays, cached by Dr.Jit's allocator, are of no use now
-    return resolution
+    return resolution, bound
+
+
+def sample_bound(current, evaluated, max_samples):
+    """The finest resolution the rays traced now allow: the current one ``current`` where more than
+    SAMPLE_CUT_SHARE of them already evaluate ``max_samples`` samples (``evaluated``: per ray, at the
+    current grid), else no bound (a very large number). A curved ray stops after ``max_samples``
+    evaluated samples, and a finer grid only adds samples (a step is ``step_voxels`` of its voxels): the
+    rays through the most occupied cells would stop short of the surfaces behind them, and the fit would
+    explain their pixels with the backdrop instead (straight rays spread their ``max_samples`` over their
+    whole interval: they are not cut short). The share is measured, not projected: samples grow more
+    slowly than the grid (1.5x for 2x on fern, reports/gpu.md), as occupancy tightens."""
+    if len(evaluated) and np.mean(np.asarray(evaluated) >= max_samples) > SAMPLE_CUT_SHARE:
+        return current
+    return np.iinfo(np.int32).max
 
 
 def fitting_resolution(state, keeps, resolution, max_vertices):
@@ -124,7 +151,8 @@ def refits_background(inputs):
 
 def ray_weights(inputs, integrator, role):
     """Per brick of the field of ``role`` (bz, by, bx NumPy): the largest weight that any traced training
-    ray (``carve_rays`` of them, at pixel centres) gives a sample there."""
+    ray (``carve_rays`` of them, at pixel centres) gives a sample there; and the samples each of those
+    rays evaluated (NumPy)."""
     field = integrator.fields[role]
     layout, to_local = field.layout, field.world_to_local
     bx, by, bz = layout.counts
@@ -140,14 +168,16 @@ def ray_weights(inputs, integrator, role):
     bank = inputs.bank
     count = min(inputs.cfg.carve_rays, bank.pixels)
     pixels = np.random.default_rng([inputs.cfg.seed, 98]).choice(bank.pixels, count, replace=False)
+    evaluated = []
     with dr.suspend_grad():
         for s in range(0, count, 1 << 17):
             idx = np.sort(pixels[s:s + (1 << 17)]).astype(np.uint32)
             o, d, *_ = bank.rays(idx, np.full((len(idx), 2), 0.5, np.float32))
             rays = march.prepare_rays(plan, o, d)
-            march.forward(plan, rays, dr.full(mi.Float, 0.5, len(idx)), probe=probe)
-            dr.eval(best)
-    return np.array(best).reshape(bz, by, bx)
+            fwd = march.forward(plan, rays, dr.full(mi.Float, 0.5, len(idx)), probe=probe)
+            dr.eval(best, fwd.stats["evaluated"])
+            evaluated.append(np.array(fwd.stats["evaluated"]))
+    return np.array(best).reshape(bz, by, bx), np.concatenate(evaluated)
 
 
 def occupancy_sigma(cfg, state):

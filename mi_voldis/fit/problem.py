@@ -114,8 +114,11 @@ class FieldFit:
         if upsample:
             self.sync_states()
             planned = resolution_at(state.schedule, step)
-            used = refine(self.inputs, state, self.integrator, self.roles, planned, memory_bound(self.inputs, state))
-            if used < planned:  # the carved lattice would outgrow max_memory_gib: this stage and later ones stop at it
+            bound = memory_bound(self.inputs, state)
+            used, reason = refine(self.inputs, state, self.integrator, self.roles, planned, bound,
+                                  None if bound is None else cfg.max_samples)
+            if used < planned:  # the carved lattice would outgrow max_memory_gib, or its rays max_samples: this
+                # stage and later ones stop at it
                 if "reference_msps" in state.plan:  # the default plan: the seconds saved buy steps at the cap
                     state.schedule, state.steps_full = rescale_after_cap(
                         state.schedule, state.steps_full, step, used, plan_cost(state.plan, state.schedule[0][1]),
@@ -123,11 +126,12 @@ class FieldFit:
                     state.plan.setdefault("rescaled", []).append([step, state.steps_full])
                 else:  # a wall-clock budget: the next replan (schedule.rescale) fills it
                     state.schedule = capped(state.schedule, used, step)
-                state.plan.setdefault("memory_caps", []).append([step, planned, used])
+                state.plan.setdefault(f"{reason}_caps", []).append([step, planned, used])
                 if self.inputs.progress:
-                    print(f"memory: the stage from step {step} stops at {used} (planned {planned}): its carved grid "
-                          f"would pass max_memory_gib {cfg.max_memory_gib:g}; {state.steps_full} steps in all",
-                          file=sys.stderr)
+                    why = (f"its carved grid would pass max_memory_gib {cfg.max_memory_gib:g}" if reason == "memory"
+                           else f"its rays would pass max_samples {cfg.max_samples}")
+                    print(f"{reason}: the stage from step {step} stops at {used} (planned {planned}): {why}; "
+                          f"{state.steps_full} steps in all", file=sys.stderr)
             self.adam.reset()
             self.rebuild()
         start = self.schedule and cfg.occupancy_at_step and step >= cfg.occupancy_at_step and not state.occupancy_on

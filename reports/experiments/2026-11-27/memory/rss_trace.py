@@ -28,13 +28,14 @@ def main():
     rest = argv[argv.index("--") + 1:] if "--" in argv else argv
     original = problem.refine
 
-    def traced(inputs, state, integrator, roles, resolution):
+    def traced(inputs, state, integrator, roles, resolution, *bounds):
         print(f"[rss] before refine to {resolution}: {rss_mib():.0f} MiB", flush=True)
-        original(inputs, state, integrator, roles, resolution)
+        used = original(inputs, state, integrator, roles, resolution, *bounds)
         if flush:
             dr.flush_malloc_cache()
         vertices = sum(state.fields[r].vertices for r in roles)
-        print(f"[rss] after refine to {resolution}: {rss_mib():.0f} MiB, {vertices} vertices", flush=True)
+        print(f"[rss] after refine to {used[0]}: {rss_mib():.0f} MiB, {vertices} vertices", flush=True)
+        return used
 
     problem.refine = traced
     after = problem.FieldFit.after_step
