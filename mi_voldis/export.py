@@ -35,12 +35,18 @@ def render_channels(scene, sensor=0, spp=None, seed=0):
     return {name: image[..., k] for k, name in enumerate(names) if name != "coverage"}
 
 
-def previews(linear, layers):
+def previews(linear, layers, backdrop=None):
     """uint8 previews of composited channels (:func:`~mi_voldis.compositing.composite_channels`): the
-    main image and each layer (premultiplied, over black, sRGB-encoded) and the depth."""
-    out = {"composite": linear_to_uint8(np.stack([linear[c] for c in "RGB"], axis=-1))}
+    main image and each layer (premultiplied, over black, or with ``backdrop`` (linear RGB) over that:
+    C + (1 - A) backdrop; sRGB-encoded) and the depth."""
+    def over(prefix):
+        rgb = np.stack([linear[f"{prefix}{c}"] for c in "RGB"], axis=-1)
+        if backdrop is None:
+            return linear_to_uint8(rgb)
+        return linear_to_uint8(rgb + (1.0 - linear[f"{prefix}A"])[..., None] * np.asarray(backdrop, rgb.dtype))
+    out = {"composite": over("")}
     for layer in layers:
-        out[layer] = linear_to_uint8(np.stack([linear[f"{layer}.{c}"] for c in "RGB"], axis=-1))
+        out[layer] = over(f"{layer}.")
     out["depth"] = depth_to_uint8(linear["depth.Z"], linear["A"])
     return out
 

@@ -72,3 +72,14 @@ class Dataset:
     def size(self):
         """(height, width) of every image."""
         return self.images.shape[1:3]
+
+    def as_photographed(self, layer):
+        """What a photograph of this dataset shows of a rendered layer ``(rgb, alpha, ...)`` (H, W, 3
+        premultiplied and H, W, as :func:`~mi_voldis.render.views.render_camera` gives it): the layer over
+        ``meta['background_color']`` where the images were composited over one (the rays that leave the
+        scene see it), else its RGB (every ray of a capture ends on something), as training compares."""
+        rgb, alpha = layer[0], layer[1]
+        color = self.meta.get("background_color")
+        if color is None:
+            return rgb
+        return rgb + (1.0 - alpha)[..., None] * np.asarray(color, rgb.dtype)

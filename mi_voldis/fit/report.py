@@ -23,14 +23,14 @@ def evaluate(ds, integrator, hull_dilation):
     for v in ds.test:
         out = render_camera(integrator, ds.cameras[v], ("composite", "full", "bg", "fg"))
         renders[v] = out
-        full = np.clip(out["full"][0], 0, 1)
+        full = np.clip(ds.as_photographed(out["full"]), 0, 1)
         row = {"view": int(v), "psnr": psnr(full, ds.images[v]), "ssim": ssim(full, ds.images[v])}
         front, hit = front_weight(integrator, ds.cameras[v])  # the full field's haze (render.surface)
         row["haze"] = float(front[hit].mean()) if hit.any() else float("nan")
         if ds.masks is not None:  # the background's, inside the masks and outside them
             row.update(background_haze(integrator, ds.cameras[v], dilate(ds.masks[v], dil)))
         if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all():
-            bg, gt = np.clip(out["bg"][0], 0, 1), ds.backgrounds[v]
+            bg, gt = np.clip(ds.as_photographed(out["bg"]), 0, 1), ds.backgrounds[v]
             region = dilate(ds.masks[v], dil) if ds.masks is not None else None
             row.update(bg_psnr=psnr(bg, gt), bg_ssim=ssim(bg, gt), bg_psnr_mask=psnr(bg, gt, region),
                        bg_ssim_mask=ssim(bg, gt, region))
@@ -63,8 +63,11 @@ def mean_defined(values):
     return float(np.mean(values)) if values else None
 
 
-def write_previews(out, renders, views):
+def write_previews(out, renders, views, backdrop=None):
+    """PNG previews of the held-out ``views``' layers (:func:`~mi_voldis.export.previews`), over the
+    dataset's ``backdrop`` colour where it has one, as its photographs are."""
     os.makedirs(out, exist_ok=True)
     for v in views:
-        for name, image in previews(composite_channels(layer_channels(renders[v])), ("full", "bg", "fg")).items():
+        linear = composite_channels(layer_channels(renders[v]))
+        for name, image in previews(linear, ("full", "bg", "fg"), backdrop).items():
             write_png(os.path.join(out, f"view{v:03d}_{name}.png"), image)

@@ -77,7 +77,8 @@ def write_run(stage, inputs, state, fit_seconds):
                              occupancy_threshold=float(occupancy_sigma(cfg, state)))
     write_scene(stage, {role: state.fields[role] for role in ("full", "bg")}, props,
                 [ds.cameras[v] for v in ds.test])
-    write_previews(os.path.join(stage, PREVIEW), renders, list(ds.test[: cfg.preview_views]))
+    write_previews(os.path.join(stage, PREVIEW), renders, list(ds.test[: cfg.preview_views]),
+                   ds.meta.get("background_color"))
     plot_log(os.path.join(stage, "training.png"), state.log, f"{ds.name}: loss and PSNR against time")
     train_rows = [r for r in state.log if "samples" in r]
     metrics = {

@@ -43,8 +43,8 @@ def choose_sh_degree(inputs, state, roles):
                  progress=inputs.progress)
         trial.sync_states()
         integ = fit_integrator(inputs, state)
-        scores[degree] = float(np.mean([psnr(render_camera(integ, ds.cameras[v], ("full",))["full"][0], ds.images[v])
-                                        for v in val]))
+        scores[degree] = float(np.mean([psnr(ds.as_photographed(render_camera(integ, ds.cameras[v], ("full",))["full"]),
+                                             ds.images[v]) for v in val]))
     degree = int(scores[1] - scores[0] >= cfg.sh_gain_db)
     for r in roles:  # keep the main fit's colour, at the chosen degree
         state.fields[r] = with_sh_degree(kept[r], degree)

@@ -363,7 +363,8 @@ def held_out_psnr(inputs, problem):
 
     def evaluate(step):
         problem.sync_states()
-        values = [psnr(render_camera(problem.integrator, bank.cams[k], ("full",))["full"][0], inputs.ds.images[v])
-                  for k, v in enumerate(views)]
+        ds = inputs.ds
+        values = [psnr(ds.as_photographed(render_camera(problem.integrator, bank.cams[k], ("full",))["full"]),
+                       ds.images[v]) for k, v in enumerate(views)]
         return {"test_psnr": float(np.mean(values))}
     return evaluate
