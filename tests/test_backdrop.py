@@ -75,3 +75,77 @@ def test_a_fit_of_a_capture_on_a_backdrop_is_scored_and_previewed_over_it(tmp_pa
     preview = iio.imread(os.path.join(out, "previews", "view000_full.png"))[..., :3].astype(int)
     expected = linear_to_uint8(np.array(BACKDROP, np.float32)).astype(int)
     assert np.abs(preview - expected).max() <= 3
+
+
+def sphere_alpha(cam, centre, radius):
+    """Alpha of a sphere seen by ``cam``: 1 at the pixels whose central ray meets it, else 0."""
+    from mi_voldis.cameras import pixel_rays
+    px, py = np.meshgrid(np.arange(cam.width) + 0.5, np.arange(cam.height) + 0.5)
+    o, d = pixel_rays(cam, px.ravel(), py.ravel())
+    t = np.sum((np.asarray(centre) - o) * d, axis=1)
+    miss = np.linalg.norm(o + t[:, None] * d - centre, axis=1)
+    return ((miss <= radius) & (t > 0)).reshape(cam.height, cam.width).astype(np.float32)
+
+
+def ring(n=12, distance=4.0, target=(0.0, 0.0, 0.0), width=64, height=48):
+    return [Camera(look_at([distance * np.sin(2 * np.pi * k / n) + target[0], 1.0 + 0.5 * (k % 2),
+                            distance * np.cos(2 * np.pi * k / n) + target[2]], list(target)), 40.0, width, height)
+            for k in range(n)]
+
+
+def test_the_silhouette_box_holds_the_object_and_little_more():
+    """A sphere of radius 0.5 off the ring's centre, seen by 12 views: the visual hull of its silhouettes
+    holds it, within its margin of lattice cells and the hull's excess of it."""
+    from mi_voldis.data.scene_box import SILHOUETTE_LATTICE, SILHOUETTE_MARGIN, silhouette_box, world_box
+    centre, radius = np.array([0.2, 0.1, -0.15]), 0.5
+    cams = ring()
+    box = world_box(cams)
+    found = silhouette_box(cams, [sphere_alpha(c, centre, radius) for c in cams], box)
+    cell = (box.hi - box.lo) / (SILHOUETTE_LATTICE - 1)
+    assert found.kind == "world"
+    assert np.all(found.lo <= centre - radius + 1e-9) and np.all(found.hi >= centre + radius - 1e-9)
+    slack = 1.3 * radius + (SILHOUETTE_MARGIN + 1) * cell
+    assert np.all(found.lo >= centre - slack) and np.all(found.hi <= centre + slack)
+    assert np.prod(found.hi - found.lo) < 0.1 * np.prod(box.hi - box.lo)
+
+
+def test_no_silhouette_box_where_the_hull_is_empty_or_reaches_the_layouts_box():
+    from mi_voldis.data.scene_box import silhouette_box, world_box
+    cams = ring()
+    box = world_box(cams)
+    full = [np.ones((c.height, c.width), np.float32) for c in cams]
+    assert silhouette_box(cams, full, box) is None  # covered everywhere: the object may go on beyond the box
+    empty = [np.zeros((c.height, c.width), np.float32) for c in cams]
+    assert silhouette_box(cams, empty, box) is None
+    # silhouettes of two different spheres: views that disagree leave no point
+    apart = [sphere_alpha(c, (1.0, 0, 0) if k % 2 else (-1.0, 0, 0), 0.2) for k, c in enumerate(cams)]
+    assert silhouette_box(cams, apart, box) is None
+
+
+def test_an_rgba_capture_of_an_object_fits_in_the_box_of_its_silhouettes(tmp_path):
+    """transforms.json with RGBA views of a sphere and no aabb: the loader carves the box from the
+    training views' alpha, says so, and 'auto' space fits in it; with an aabb the stated box stays."""
+    from mi_voldis.data.scene_box import fitting_box
+    root = tmp_path / "sphere"
+    os.makedirs(root / "images")
+    centre, radius = np.array([0.1, 0.0, 0.0]), 0.4
+    cams = ring(n=9, width=W, height=H)
+    frames = []
+    for k, cam in enumerate(cams):
+        alpha = sphere_alpha(cam, centre, radius)
+        rgba = np.concatenate([np.full((H, W, 3), 200.0), 255 * alpha[..., None]], -1).astype(np.uint8)
+        iio.imwrite(root / "images" / f"r_{k}.png", rgba)
+        frames.append({"file_path": f"images/r_{k}", "transform_matrix": mitsuba_to_opengl(cam.to_world).tolist()})
+    meta = {"fl_x": cams[0].focal, "w": W, "h": H, "frames": frames}
+    with open(root / "transforms.json", "w") as f:
+        json.dump(meta, f)
+    ds = load_dataset(str(root))
+    assert ds.meta["silhouette_box"] and fitting_box(ds).kind == "world"
+    assert np.all(ds.box.lo <= centre - radius) and np.all(ds.box.hi >= centre + radius)
+    assert np.all(ds.box.hi - ds.box.lo < 4 * radius)
+    assert any("scene box from the training views' alpha" in n for n in ds.meta["notes"])
+    meta["aabb"] = [[-2, -2, -2], [2, 2, 2]]
+    with open(root / "transforms.json", "w") as f:
+        json.dump(meta, f)
+    ds = load_dataset(str(root))
+    assert "silhouette_box" not in ds.meta and ds.box.lo.tolist() == [-2, -2, -2]

@@ -148,6 +148,14 @@ def read_mask(path, rule="nonzero"):
     return obj
 
 
+def read_alpha(path):
+    """The alpha channel in [0, 1] of an RGBA or grey + alpha image (H, W), as stored (an EXR's A)."""
+    img = _read(path, "image")
+    if img.ndim != 3 or img.shape[2] not in (2, 4):
+        raise DatasetError(f"{path}: the image has no alpha channel")
+    return np.clip(img[..., -1], 0.0, 1.0)
+
+
 def read_coverage(path):
     """Fractional object coverage in [0, 1] (the first channel; EXR or 16-bit PNG), as stored."""
     img = _read(path, "coverage")

@@ -1,12 +1,14 @@
 """Scene boxes from camera layouts: a world box for 360-degree captures, NDC for forward-facing ones."""
 import numpy as np
 
-from ..cameras import pixel_rays
+from ..cameras import pixel_of, pixel_rays
 from ..space import SceneBox, SceneSpace
 from .types import DatasetError
 
 NERF_NEAR = 1.0  # NeRF's NDC near plane (world units), used when nothing gives depth bounds
 NEAR_FRACTION = 0.75  # forward-facing captures: rays start at 0.75 x the nearest depth bound (NeRF's NDC near plane)
+SILHOUETTE_LATTICE = 64  # points along each side of the box that silhouette_box carves
+SILHOUETTE_MARGIN = 2  # lattice cells the silhouette box grows by
 
 
 def look_at_point(cameras):
@@ -30,6 +32,35 @@ def world_box(cameras, margin=1.1):
               for c in cameras)
     half = margin * dist * np.tan(np.radians(fov) / 2)
     return SceneBox("world", centre - half, centre + half)
+
+
+def silhouette_box(cameras, alphas, box, lattice=SILHOUETTE_LATTICE):
+    """World box of what views with an alpha channel show (an object rendered on an empty backdrop,
+    Blender's RGBA layout): the box of the visual hull their ``alphas`` (per camera (H, W) in [0, 1])
+    carve out of ``box`` (the camera layout's generous box), on ``lattice``^3 points: a point stays
+    where every view that has it in frame covers it (alpha > 0; views it falls outside of abstain), and
+    the box of those grows by SILHOUETTE_MARGIN lattice cells (a part thinner than a cell can fall
+    between the points). The hull holds the object (each view's silhouette does), so nothing seen is
+    cut off. None where no point stays (poses and
+    alphas that disagree) or the hull reaches a face of ``box`` (the object may go on beyond it)."""
+    axes = [np.linspace(a, b, lattice) for a, b in zip(box.lo, box.hi)]
+    points = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    keep, seen = np.ones(len(points), bool), np.zeros(len(points), bool)
+    for cam, alpha in zip(cameras, alphas):
+        ix, iy, inside = pixel_of(cam, points)
+        covered = np.zeros(len(points), bool)
+        covered[inside] = alpha[iy[inside], ix[inside]] > 0
+        keep &= covered | ~inside
+        seen |= inside
+    keep &= seen
+    if not keep.any():
+        return None
+    index = np.stack(np.unravel_index(np.flatnonzero(keep), (lattice,) * 3), -1)
+    if index.min() == 0 or index.max() == lattice - 1:
+        return None
+    cell = (np.asarray(box.hi) - np.asarray(box.lo)) / (lattice - 1)
+    grow = SILHOUETTE_MARGIN * cell
+    return SceneBox("world", points[keep].min(axis=0) - grow, points[keep].max(axis=0) + grow)
 
 
 def is_forward_facing(cameras):
@@ -139,12 +170,14 @@ def contracted_box(cameras, forward_facing, near=None, shell=1.0):
 
 def fitting_box(dataset, space="auto", shell=1.0):
     """The scene box a fit uses: the dataset's own box for 'world' or 'ndc' (a bounded scene states its
-    box; forward-facing loaders give NDC), a contracted space for 'contract'; 'auto' keeps a stated world
-    box (``meta['aabb']``) and contracts everything else, forward-facing captures included: on the CPU
-    fern and the statue fitted better contracted than in NDC under the default plan (reports/notes.md)."""
+    box; forward-facing loaders give NDC), a contracted space for 'contract'; 'auto' keeps a world box
+    that is stated (``meta['aabb']``) or carved from the views' alpha (``meta['silhouette_box']``: an
+    object on an empty backdrop) and contracts everything else, forward-facing captures included: on the
+    CPU fern and the statue fitted better contracted than in NDC under the default plan (reports/notes.md)."""
     box = dataset.box
     if space == "auto":
-        space = "world" if box.kind == "world" and dataset.meta.get("aabb") else "contract"
+        bounded = dataset.meta.get("aabb") or dataset.meta.get("silhouette_box")
+        space = "world" if box.kind == "world" and bounded else "contract"
     if space == box.kind:
         return box
     if space == "contract":

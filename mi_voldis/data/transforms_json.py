@@ -4,14 +4,15 @@ Top level: ``camera_angle_x`` (Blender) or ``fl_x`` [, ``fl_y``, ``cx``, ``cy``,
 (pixels, for images of ``w`` x ``h``), nerfstudio's ``camera_model`` (PINHOLE, OPENCV,
 OPENCV_FISHEYE: the views are undistorted once with ``k1``..``k4``, ``p1``, ``p2``, read as nerfstudio
 reads them, ``k4`` under OPENCV its r^8 term; views with ``fl_y`` != ``fl_x`` are resampled to square
-pixels; :mod:`mi_voldis.data.lens`); every one of these may instead be given per frame. Optional:
-``aabb`` ([[x0, y0, z0], [x1, y1, z1]], the scene box), ``forward_facing`` (bool; otherwise detected
-from the camera layout), ``near`` / ``far`` (forward-facing depth bounds; estimated from the points,
-or NeRF's default near plane 1, when absent), ``ply_file_path`` (sparse points in the frames' world
-frame, as ns-process-data writes them: they give depth bounds and the box), ``applied_transform``
-(the 3x4 matrix nerfstudio applied to COLMAP's world; kept in ``meta``), ``background_color`` (RGB
-over which RGBA images are composited; default white, Blender's convention), ``moved_transform``
-(4x4 world-space matrix of the ``moved_path`` ground truth), ``applied_scale`` (kept in ``meta``),
+pixels; :mod:`mi_voldis.data.lens`); every one of these may instead be given per frame. Optional: ``aabb``
+([[x0, y0, z0], [x1, y1, z1]], the scene box; without it, RGBA views of a 360-degree layout give the box of
+their alpha's visual hull, :func:`~mi_voldis.data.scene_box.silhouette_box`), ``forward_facing`` (bool;
+otherwise detected from the camera layout), ``near`` / ``far`` (forward-facing depth bounds; estimated from
+the points, or NeRF's default near plane 1, when absent), ``ply_file_path`` (sparse points in the frames'
+world frame, as ns-process-data writes them: they give depth bounds and the box), ``applied_transform`` (the
+3x4 matrix nerfstudio applied to COLMAP's world; kept in ``meta``), ``background_color`` (RGB over which RGBA
+images are composited; default white, Blender's convention), ``moved_transform`` (4x4 world-space matrix of
+the ``moved_path`` ground truth), ``applied_scale`` (kept in ``meta``),
 ``train_filenames`` / ``test_filenames`` (``val_filenames`` when there is no test list; paths as the
 frames' ``file_path``: they give the split, as nerfstudio's dataparser reads them; frames in no list
 are left out). Per frame: ``file_path`` (relative to
@@ -38,6 +39,7 @@ from .images import (
     has_alpha,
     is_linear,
     mask_folder_paths,
+    read_alpha,
     read_coverage,
     read_effects,
     read_image,
@@ -47,7 +49,7 @@ from .images import (
 from .images import _reduce as reduce_mask
 from .lens import LensError, lens_from_opencv_keys
 from .points import read_ply
-from .scene_box import capture_box
+from .scene_box import capture_box, silhouette_box
 from .types import Dataset, DatasetError
 
 INTRINSIC_KEYS = ("camera_model", "camera_angle_x", "fl_x", "fl_y", "cx", "cy", "w", "h",
@@ -254,6 +256,15 @@ def load_transforms(root, holdout=8, factor=None):
     ds.box, ds.near_far = _box(top, cameras, metas[0][1], ds.points, notes)
     if "aabb" in top:
         ds.meta["aabb"] = True  # a bounded scene: fitting keeps its world box
+    elif "background_color" in ds.meta and ds.box.kind == "world":  # an object on an empty backdrop
+        train = [k for k in ds.train if has_alpha(paths[k])]
+        alphas = [undistort[k](read_alpha(paths[k])) for k in train]
+        box = silhouette_box([cameras[k] for k in train], alphas, ds.box)
+        if box is not None:
+            ds.box = box
+            ds.meta["silhouette_box"] = True  # fitting keeps it (scene_box.fitting_box)
+            notes.append(f"scene box from the training views' alpha (their visual hull): "
+                         f"{np.round(box.lo, 3).tolist()} to {np.round(box.hi, 3).tolist()}")
     return ds
 
 

@@ -64,8 +64,8 @@ class FitConfig(Settings):
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
                                  "'world' (the dataset's box), 'ndc' (forward-facing captures) or 'auto' "
-                                 "(world where the dataset states a box, else contract; config.json records the "
-                                 "space chosen as space_used)",
+                                 "(world where the dataset states a box or its RGBA views' alpha carves one, "
+                                 "else contract; config.json records the space chosen as space_used)",
                          choices=("auto", "contract", "world", "ndc"))
     contract_shell: float = setting(1.0, "contracted space: the outer shell's share b of the scene cube "
                                          "[-(1 + b), 1 + b]^3 (1: Mip-NeRF 360)", above=0)
