@@ -49,15 +49,28 @@ class Occupancy:
         """Occupied fraction of the cells."""
         return float(self.cells.mean())
 
+    def _cells(self, p):
+        """Scene-space points ``p`` in cell units (0 at ``lo``, one per cell) and the scale that maps to them."""
+        scale = mi.Vector3f(*[float(s / e) for s, e in zip(self.shape, self.hi - self.lo)])
+        return (p - mi.Vector3f(*self.lo.tolist())) * scale, scale
+
     def lookup(self, p):
         """True where the scene-space points ``p`` fall in an occupied cell."""
-        res = mi.Vector3f(*self.shape)
-        scale = [float(s / e) for s, e in zip(self.shape, self.hi - self.lo)]
-        u = (p - mi.Vector3f(*self.lo.tolist())) * mi.Vector3f(*scale)
-        inside = dr.all((u >= 0.0) & (u < res))
+        u, _ = self._cells(p)
+        inside = dr.all((u >= 0.0) & (u < mi.Vector3f(*self.shape)))
         i = mi.Vector3u(dr.clip(mi.Vector3i(u), 0, mi.Vector3i(*[s - 1 for s in self.shape])))
         idx = (i.z * self.shape[1] + i.y) * self.shape[0] + i.x
         return inside & (dr.gather(mi.Float, self.data, idx, inside) > 0.0)
+
+    def exit_distance(self, p, d):
+        """The t >= 0 at which p + t d leaves the cell that holds the scene-space point ``p`` (``d``: a
+        scene-space direction, not necessarily unit): per axis (face - u) / du in cell units, the
+        nearest face ahead (infinite along an axis ``d`` does not move in)."""
+        u, scale = self._cells(p)
+        du, c = d * scale, dr.floor(u)
+        ahead = [dr.select(du[a] > 0.0, (c[a] + 1.0 - u[a]) / du[a],
+                           dr.select(du[a] < 0.0, (c[a] - u[a]) / du[a], dr.inf)) for a in range(3)]
+        return dr.maximum(dr.minimum(dr.minimum(ahead[0], ahead[1]), ahead[2]), 0.0)
 
     @staticmethod
     def build(lookups, space, resolution, sigma_threshold, boxes_lo, boxes_hi, extra=None):
