@@ -5,12 +5,14 @@ the composition rule, the layers wanted and the number of samples. The primal pa
 for every (chain, layer) term of :mod:`mixing`, the sums  sum_i w_i (g_i, k_i, k_i t_i).
 
 Where samples lie (:class:`Path`): in world and NDC space rays are straight and take ``samples``
-stratified samples t_i = t0 + (i + u) dt over their interval in the fields' boxes (or as many as fit
-at ``step``). In contracted space rays are curves: the march steps along the world ray, each step
-one ``step`` long in scene space (:meth:`mi_voldis.space.SceneSpace.step_length`), a sample at the
-fraction u of each step; across cells the occupancy grid marks empty it takes steps of one cell
-(``skip``), which cannot cross the one-cell dilation around occupied cells, so no dense feature is
-stepped over. A ray stops after ``samples`` evaluated samples there.
+stratified samples t_i = t0 + (i + u) dt over their interval in the fields' boxes (or as many as fit at
+``step``); from a slot in an empty occupancy cell a ray moves to the first slot past that cell, the same
+samples in fewer iterations (:meth:`Path.next_slot`). In contracted space rays are curves: the march
+steps along the world ray, each step one ``step`` long in scene space
+(:meth:`mi_voldis.space.SceneSpace.step_length`), a sample at the fraction u of each step; across cells
+the occupancy grid marks empty it takes steps of one cell (``skip``), which cannot cross the one-cell
+dilation around occupied cells, so no dense feature is stepped over. A ray stops after ``samples``
+evaluated samples there.
 
 The adjoint replays the march front to back (as Mitsuba's PRB integrators do). The lookups' raw
 values at every evaluated sample can be recorded by the primal (:class:`Record`, 16 bytes per sample
