@@ -117,7 +117,7 @@ def run_throughput(quick):
 SCENES = ["tabletop", "room"]  # bundled (rendered by scripts/make_dataset.py)
 RANDOM_SEEDS = [0, 1, 2, 3, 4]  # random scenes (make_dataset.py --random): the first five, fixed before any result
 TRUTH_SCENES = SCENES + [f"random{k}" for k in RANDOM_SEEDS]  # the scenes with ground truth
-CAPTURES = ["fern", "horns", "statue", "garden"]  # ../shared/data; skipped when absent
+CAPTURES = ["fern", "horns", "statue", "garden", "lego_200"]  # ../shared/data; skipped when absent
 VARIANTS = {
     "tabletop": {"dense (carve=false)": ["carve=false"]},
     "fern": {"NDC (space=ndc, as the peers fit LLFF)": ["space=\"ndc\""]},
