@@ -102,8 +102,8 @@ def sample_bound(current, evaluated, max_samples):
     evaluated samples, and a finer grid only adds samples (a step is ``step_voxels`` of its voxels): the
     rays through the most occupied cells would stop short of the surfaces behind them, and the fit would
     explain their pixels with the backdrop instead (straight rays spread their ``max_samples`` over their
-    whole interval: they are not cut short). The share is measured, not projected: samples grow more
-    slowly than the grid (1.5x for 2x on fern, reports/gpu.md), as occupancy tightens."""
+    whole interval: they are not cut short). The share is measured, not projected from the grid's
+    growth: as occupancy tightens, samples grow more slowly than the resolution (reports/gpu.md)."""
     if len(evaluated) and np.mean(np.asarray(evaluated) >= max_samples) > SAMPLE_CUT_SHARE:
         return current
     return np.iinfo(np.int32).max
