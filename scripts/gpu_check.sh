@@ -23,7 +23,14 @@
 # cuda_ad_rgb), GPU_CHECK_STEPS (default "env tests profile quick"), GPU_CHECK_TESTS (pytest's
 # arguments, default "tests"), GPU_CHECK_BATCHES (rays per profiled step, default "16384,65536,262144"),
 # GPU_CHECK_CAPTURES (default "fern statue garden"), CAPTURES (their folder: default $MI_VOLDIS_CAPTURES,
-# else ../shared/data).
+# else ../shared/data), GPU_CHECK_TIMEOUT (seconds any one step may run: a device call has a limit of
+# its own, and what a step wrote before it was stopped is kept), GPU_CHECK_ARCHIVE (a .tgz path: OUT
+# without the fields' grids and checkpoints, packed again after every step, so that one file carries it
+# all back where only a few files may return, e.g. $OUT/gpu_check.tgz with OUT a folder in $TMPDIR).
+#
+# The device tool carries at most 64 MiB: the bundle (21 MiB slimmed) and the captures copied into an
+# ignored folder leave little room for the checkout's report PNGs; move aside only reports/*.png (the
+# scenes' textures in mi_voldis/scenes/ are needed by the suite), and put them back afterwards.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -55,16 +62,28 @@ export MI_VOLDIS_VARIANT=$VARIANT PYTHONUNBUFFERED=1
 
 SUMMARY=()
 FAILED=0
+LIMIT=()
+[ -z "${GPU_CHECK_TIMEOUT:-}" ] || LIMIT=(timeout "$GPU_CHECK_TIMEOUT")
+pack() {  # OUT, without grids and checkpoints, into GPU_CHECK_ARCHIVE (when set)
+    [ -z "${GPU_CHECK_ARCHIVE:-}" ] && return 0
+    tar -C "$DEST" --exclude='*.npz' --exclude=checkpoints -czf "$GPU_CHECK_ARCHIVE.partial" . &&
+        mv "$GPU_CHECK_ARCHIVE.partial" "$GPU_CHECK_ARCHIVE"
+}
 step() {  # step NAME COMMAND...: print the command, run it (output to the terminal and OUT/NAME.log)
     local name=$1
     shift
     case " $STEPS " in *" $name "*) ;; *) return 0 ;; esac
     say "+ [$name] MI_VOLDIS_VARIANT=$MI_VOLDIS_VARIANT $*"
     local t0=$SECONDS
-    "$@" 2>&1 | tee "$DEST/$name.log"
+    if declare -F "$1" > /dev/null; then  # a function of this script limits its own commands
+        "$@" 2>&1 | tee "$DEST/$name.log"
+    else
+        "${LIMIT[@]}" "$@" 2>&1 | tee "$DEST/$name.log"
+    fi
     local rc=${PIPESTATUS[0]}
     SUMMARY+=("$name: exit $rc in $((SECONDS - t0)) s: $*")
     [ "$rc" -eq 0 ] || FAILED=$((FAILED + 1))
+    pack
 }
 
 env_info() {  # the versions, the GPU, and whether OpenCV has its contrib modules
@@ -77,7 +96,7 @@ print("python", platform.python_version(), "mitsuba", mi.__version__, "drjit", d
 captures() {  # the default command on each capture, all at once; fails if any fit fails
     local name pids=() rc=0
     for name in "${CAPTURE_NAMES[@]}"; do
-        "$PYTHON" scripts/train.py "$CAPTURES/$name" --out "$DEST/captures/$name" --variant "$VARIANT" \
+        "${LIMIT[@]}" "$PYTHON" scripts/train.py "$CAPTURES/$name" --out "$DEST/captures/$name" --variant "$VARIANT" \
             > "$DEST/captures_$name.log" 2>&1 &
         pids+=("$!")
     done
@@ -93,6 +112,7 @@ step captures captures
 step quick "$PYTHON" scripts/bench.py --quick --variant "$VARIANT" --work "$TMP/gpu_check_bench" --report "$DEST/report"
 
 say ""
-say "gpu_check: $VARIANT, outputs in $DEST"
+say "gpu_check: $VARIANT, outputs in $DEST${GPU_CHECK_ARCHIVE:+ (packed into $GPU_CHECK_ARCHIVE)}"
 for line in "${SUMMARY[@]}"; do say "  $line"; done
+pack
 exit "$FAILED"
