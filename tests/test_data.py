@@ -118,7 +118,14 @@ def test_the_fit_space_follows_the_cameras(tmp_path):
     del meta["aabb"]
     with open(tmp_path / "o" / "transforms.json", "w") as f:
         json.dump(meta, f)
-    assert fitting_box(load_dataset(str(tmp_path / "o")), "auto").kind == "contract"
+    orbit_ds = load_dataset(str(tmp_path / "o"))
+    assert fitting_box(orbit_ds, "auto").kind == "contract"
+    # contract_radius scales a 360-degree capture's linear cube, not a forward-facing one's
+    full, half = fitting_box(orbit_ds, "auto"), fitting_box(orbit_ds, "auto", radius_scale=0.5)
+    np.testing.assert_allclose(half.to_world[:3, :3], 0.5 * full.to_world[:3, :3])
+    np.testing.assert_allclose(half.to_world[:3, 3], full.to_world[:3, 3])
+    np.testing.assert_allclose(fitting_box(forward, "auto", radius_scale=0.5).to_world,
+                               fitting_box(forward, "auto").to_world)
 
 
 def test_ndc_space_maps_rays_to_lines():

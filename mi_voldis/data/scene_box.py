@@ -140,15 +140,15 @@ def ndc_box(cameras, near, far, z_max=0.999):
     return SceneBox("ndc", lo, hi, ref, near, scale)
 
 
-def contracted_box(cameras, forward_facing, near=None, shell=1.0):
+def contracted_box(cameras, forward_facing, near=None, shell=1.0, radius_scale=1.0):
     """Contracted space of a capture (:mod:`mi_voldis.space`): the inner cube holds every camera.
 
-    360-degree captures: centred on the cameras' common look-at point, axis-aligned, half-size 1.1 x
-    the farthest camera's distance from it, so that the object and the cameras' ring stay linear and
-    the far background fills the shell. Forward-facing captures: centred on the cameras, in the frame
-    of their average pose, half-size the larger of 1.1 x the rig's radius and half the nearest depth
-    ``near``: the scene lies in the shell, uniform in disparity as in NDC, and views from off the rig
-    still see it."""
+    360-degree captures: centred on the cameras' common look-at point, axis-aligned, half-size
+    ``radius_scale`` x 1.1 x the farthest camera's distance from it, so that (at 1) the object and the
+    cameras' ring stay linear and the far background fills the shell. Forward-facing captures: centred
+    on the cameras, in the frame of their average pose, half-size the larger of 1.1 x the rig's radius
+    and half the nearest depth ``near``: the scene lies in the shell, uniform in disparity as in NDC,
+    and views from off the rig still see it."""
     positions = np.array([np.asarray(c.to_world)[:3, 3] for c in cameras])
     if forward_facing:
         frame = average_pose(cameras)
@@ -159,7 +159,7 @@ def contracted_box(cameras, forward_facing, near=None, shell=1.0):
     else:
         frame = np.eye(4)
         centre = look_at_point(cameras)
-        radius = 1.1 * np.max(np.linalg.norm(positions - centre, axis=1))
+        radius = radius_scale * 1.1 * np.max(np.linalg.norm(positions - centre, axis=1))
     to_world = frame.copy()
     to_world[:3, :3] = frame[:3, :3] * radius
     to_world[:3, 3] = centre
@@ -168,7 +168,7 @@ def contracted_box(cameras, forward_facing, near=None, shell=1.0):
     return SceneBox("contract", np.full(3, -e), np.full(3, e), to_world=to_world, shell=shell, near=start)
 
 
-def fitting_box(dataset, space="auto", shell=1.0):
+def fitting_box(dataset, space="auto", shell=1.0, radius_scale=1.0):
     """The scene box a fit uses: the dataset's own box for 'world' or 'ndc' (a bounded scene states its
     box; forward-facing loaders give NDC), a contracted space for 'contract'; 'auto' keeps a world box
     that is stated (``meta['aabb']``) or carved from the views' alpha (``meta['silhouette_box']``: an
@@ -182,6 +182,7 @@ def fitting_box(dataset, space="auto", shell=1.0):
         return box
     if space == "contract":
         near = float(np.min(dataset.near_far)) if dataset.near_far is not None else None
-        return contracted_box(dataset.cameras, box.kind == "ndc" or is_forward_facing(dataset.cameras), near, shell)
+        return contracted_box(dataset.cameras, box.kind == "ndc" or is_forward_facing(dataset.cameras), near, shell,
+                              radius_scale)
     raise ValueError(f"{dataset.root}: a '{space}' scene space needs a dataset that gives one (it gives "
                      f"'{box.kind}')")

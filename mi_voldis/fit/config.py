@@ -59,7 +59,7 @@ class FitConfig(Settings):
     # stepped with the then default rates and TV weights
     ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
-             "lr_views_growth": False}
+             "lr_views_growth": False, "contract_radius": 1.0}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -69,6 +69,10 @@ class FitConfig(Settings):
                          choices=("auto", "contract", "world", "ndc"))
     contract_shell: float = setting(1.0, "contracted space: the outer shell's share b of the scene cube "
                                          "[-(1 + b), 1 + b]^3 (1: Mip-NeRF 360)", above=0)
+    contract_radius: float = setting(1.0, "contracted space of a 360-degree capture: the linear cube's half-size "
+                                          "as a multiple of 1.1 x the farthest camera's distance from the look-at "
+                                          "point (below 1: finer voxels where the cameras look, the cameras "
+                                          "in the shell)", above=0)
 
     # ---- schedule: coarse to fine, as data (mi_voldis/fit/schedule.py derives what is left null / 'auto')
     minutes: float | str | None = setting("auto", "time budget of the fit: the number of steps is chosen to fill "

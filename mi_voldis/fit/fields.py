@@ -37,7 +37,7 @@ class FitInputs:
 
     @classmethod
     def of(cls, dataset, cfg, checkpoint, progress=True):
-        box = fitting_box(dataset, cfg.space, cfg.contract_shell)
+        box = fitting_box(dataset, cfg.space, cfg.contract_shell, cfg.contract_radius)
         return cls(dataset, cfg, box, SceneSpace.from_box(box), RayBank(dataset, dataset.train), checkpoint,
                    progress)
 

@@ -50,7 +50,8 @@ def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto"
                 f"ignored: only bg_strategy 'guided' reads them, not '{cfg.bg_strategy}'"
             print(f"note: effect masks (the object's shadow) on {int(dataset.effects.any(axis=(1, 2)).sum())} of "
                   f"{len(dataset.images)} views: {use}", file=sys.stderr)
-        space = fitting_box(dataset, cfg.space, cfg.contract_shell).kind  # 'auto' resolved from the cameras
+        # 'auto' resolved from the cameras
+        space = fitting_box(dataset, cfg.space, cfg.contract_shell, cfg.contract_radius).kind
         write_json(os.path.join(stage, "config.json"), {**cfg.to_dict(), "dataset": record, "space_used": space})
         t0 = time.perf_counter()
         inputs, state = fit(dataset, os.path.join(stage, CHECKPOINT), cfg, resume=resume, progress=progress)
