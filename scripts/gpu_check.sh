@@ -59,6 +59,8 @@ else
     export PYTHONPATH="$ROOT${PYTHONPATH:+:$PYTHONPATH}"
 fi
 export MI_VOLDIS_VARIANT=$VARIANT PYTHONUNBUFFERED=1
+# the suite's capture tests read the same folder (skipped, with the reason, where it is missing)
+[ -d "$CAPTURES" ] && export MI_VOLDIS_CAPTURES="$(cd "$CAPTURES" && pwd)"
 
 SUMMARY=()
 FAILED=0
