@@ -2,7 +2,8 @@
 # The test suite and the benchmark's CUDA rows on a GPU machine, in one command that prints each
 # command before it runs it and, at the end, what ran and how it ended.
 #
-#   scripts/gpu_check.sh [OUT]     # OUT: logs and reports (default: $OUT, else out/gpu_check)
+#   scripts/gpu_check.sh [OUT]     # OUT: logs and reports (default: $OUT, else out/gpu_check); a new or empty
+#                                  # folder, or one an earlier gpu_check wrote
 #
 # Steps (each one's output also in OUT/<step>.log; the exit status is the number of failed steps):
 #   env      Python, Mitsuba / Dr.Jit versions, the GPU (nvidia-smi), OpenCV with or without contrib
@@ -35,8 +36,23 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 DEST=${1:-${OUT:-out/gpu_check}}
+# OUT holds what gpu_check wrote (marked by OUT/.gpu_check, which lists the archives it wrote) or nothing: a
+# folder or an archive it did not write is refused, never replaced
+if [ -e "$DEST" ] && [ -n "$(ls -A "$DEST")" ] && [ ! -f "$DEST/.gpu_check" ]; then
+    echo "gpu_check: $DEST holds files gpu_check did not write: give a new or empty folder" >&2
+    exit 1
+fi
+if [ -n "${GPU_CHECK_ARCHIVE:-}" ] && [ -e "$GPU_CHECK_ARCHIVE" ] &&
+    ! grep -qxF "$GPU_CHECK_ARCHIVE" "$DEST/.gpu_check" 2>/dev/null; then
+    echo "gpu_check: $GPU_CHECK_ARCHIVE is already there and gpu_check did not write it into $DEST: name another" >&2
+    exit 1
+fi
 mkdir -p "$DEST"
 DEST=$(cd "$DEST" && pwd)
+touch "$DEST/.gpu_check"
+if [ -n "${GPU_CHECK_ARCHIVE:-}" ] && ! grep -qxF "$GPU_CHECK_ARCHIVE" "$DEST/.gpu_check"; then
+    echo "$GPU_CHECK_ARCHIVE" >> "$DEST/.gpu_check"
+fi
 TMP=${TMPDIR:-/tmp}
 VARIANT=${GPU_CHECK_VARIANT:-cuda_ad_rgb}
 STEPS=${GPU_CHECK_STEPS:-env tests profile quick}

@@ -144,6 +144,11 @@ def test_an_rgba_capture_of_an_object_fits_in_the_box_of_its_silhouettes(tmp_pat
     assert np.all(ds.box.lo <= centre - radius) and np.all(ds.box.hi >= centre + radius)
     assert np.all(ds.box.hi - ds.box.lo < 4 * radius)
     assert any("scene box from the training views' alpha" in n for n in ds.meta["notes"])
+    for k in range(len(cams)):  # alpha everywhere: the hull fills the cameras' box, no box is carved, and it says so
+        iio.imwrite(root / "images" / f"r_{k}.png", np.full((H, W, 4), 200, np.uint8))
+    ds = load_dataset(str(root))
+    assert "silhouette_box" not in ds.meta and fitting_box(ds).kind == "contract"
+    assert any("no scene box from the training views' alpha" in n for n in ds.meta["notes"])
     meta["aabb"] = [[-2, -2, -2], [2, 2, 2]]
     with open(root / "transforms.json", "w") as f:
         json.dump(meta, f)

@@ -265,6 +265,9 @@ def load_transforms(root, holdout=8, factor=None):
             ds.meta["silhouette_box"] = True  # fitting keeps it (scene_box.fitting_box)
             notes.append(f"scene box from the training views' alpha (their visual hull): "
                          f"{np.round(box.lo, 3).tolist()} to {np.round(box.hi, 3).tolist()}")
+        else:
+            notes.append("no scene box from the training views' alpha (their visual hull is empty, or reaches the "
+                         "cameras' box): fitted in contracted space")
     return ds
 
 

@@ -1,16 +1,24 @@
 #!/usr/bin/env bash
-# One device call (#42's GPU rows): the suite on cuda_ad_rgb beside the default command on fern, horns and garden
-# and two fern variants (a 4x batch; the final grid capped at 512^3), all at once on one GPU. The default plan is
-# costed in samples, not seconds, so running beside each other changes wall times (upper bounds), not fits.
+# A device call of #42's GPU rows: the suite on cuda_ad_rgb beside default commands, all at once on one GPU. The
+# default plan is costed in samples, not seconds, so running beside each other changes wall times (upper bounds),
+# not the fits. The first call of 2026-11-27 as it ran (rerun.sh and statue.sh: the second and third):
 #
 #   reports/experiments/2026-11-27/gpu/run.sh OUT CAPTURES     # from the checkout; carry .gpu and CAPTURES
 #
-# OUT gets at most 8 files (the device tool's limit): tests.log, smi.csv (GPU memory every 5 s), summary.txt and
-# one NAME.tgz per fit (its run folder without the grids), each packed as soon as that fit ends.
+# GPU_RUN_FITS: "NAME:CAPTURE[:SETTING,...] ..." (default: fern, horns, garden and two fern variants);
+# GPU_RUN_TESTS: pytest's arguments (empty: no suite); GPU_RUN_LIMIT: seconds any one job may take.
+# OUT (a new or empty folder) gets tests.log, smi.csv (GPU memory every 5 s), summary.txt and one NAME.tgz per
+# fit (its run folder without the grids), each packed as soon as that fit ends: at most 8 files come back.
 set -u
 OUT=$1
 CAPTURES=$2
-LIMIT=${GPU_RUN_LIMIT:-510}  # seconds any one job may take: the call's own limit is 600
+FITS=${GPU_RUN_FITS-"fern:fern fern_b131k:fern:batch_rays=131072 fern_r512:fern:max_resolution=512 horns:horns garden:garden"}
+TESTS=${GPU_RUN_TESTS-"-n 6 tests"}
+LIMIT=${GPU_RUN_LIMIT:-510}  # the call's own limit is 600
+if [ -e "$OUT" ] && [ -n "$(ls -A "$OUT")" ]; then
+    echo "run.sh: $OUT is not empty: give a new or empty folder (nothing there is replaced)" >&2
+    exit 1
+fi
 BUNDLE=${GPU_BUNDLE-.gpu/site312.tar.xz}  # empty: Mitsuba from the Python in use (a dry run on the CPU)
 RUNS=$(mktemp -d)
 mkdir -p "$OUT"
@@ -23,26 +31,31 @@ export MI_VOLDIS_CAPTURES=$PWD/$CAPTURES
 nvidia-smi --query-gpu=timestamp,memory.used,utilization.gpu --format=csv -l 5 > "$OUT/smi.csv" 2>&1 &
 SMI=$!
 
-fit() {  # fit NAME CAPTURE [--set ...]: the default command, then its run folder packed without the grids
-    local name=$1 capture=$2
-    shift 2
+fit() {  # fit NAME CAPTURE [SETTING,...]: the default command, then its run folder packed without the grids
+    local name=$1 capture=$2 sets=() s
+    IFS=, read -r -a list <<< "${3:-}"
+    for s in "${list[@]}"; do sets+=(--set "$s"); done
     local t0=$SECONDS
     timeout "$LIMIT" python3 scripts/train.py "$CAPTURES/$capture" --out "$RUNS/$name" \
-        --variant "$MI_VOLDIS_VARIANT" "$@" > "$RUNS/$name.log" 2>&1
+        --variant "$MI_VOLDIS_VARIANT" "${sets[@]}" > "$RUNS/$name.log" 2>&1
     local rc=$?
-    echo "$name: exit $rc in $((SECONDS - t0)) s: train.py $capture $*" >> "$OUT/summary.txt"
+    echo "$name: exit $rc in $((SECONDS - t0)) s: train.py $capture ${sets[*]}" >> "$OUT/summary.txt"
     tar -C "$RUNS" -czf "$OUT/$name.tgz" --exclude='*.npz' "$name.log" "$name"
 }
-fit fern fern &
-fit fern_b131k fern --set batch_rays=131072 &
-fit fern_r512 fern --set max_resolution=512 &
-fit horns horns &
-fit garden garden &
-t0=$SECONDS
-timeout "$LIMIT" python3 -m pytest -q -rfEs -p no:cacheprovider -n 6 tests > "$OUT/tests.log" 2>&1
-echo "tests: exit $? in $((SECONDS - t0)) s" >> "$OUT/summary.txt"
-wait $(jobs -p | grep -v "^$SMI$")
+pids=()
+for spec in $FITS; do
+    IFS=: read -r name capture sets <<< "$spec"
+    fit "$name" "$capture" "$sets" &
+    pids+=("$!")
+done
+if [ -n "$TESTS" ]; then
+    t0=$SECONDS
+    read -r -a args <<< "$TESTS"
+    timeout "$LIMIT" python3 -m pytest -q -rfEs -p no:cacheprovider "${args[@]}" > "$OUT/tests.log" 2>&1
+    echo "tests: exit $? in $((SECONDS - t0)) s" >> "$OUT/summary.txt"
+fi
+for pid in "${pids[@]}"; do wait "$pid"; done
 kill "$SMI"
 cat "$OUT/summary.txt"
-tail -n 3 "$OUT/tests.log"
+[ -z "$TESTS" ] || tail -n 3 "$OUT/tests.log"
 for f in "$RUNS"/*.log; do echo "== $f"; tail -n 4 "$f"; done
