@@ -114,7 +114,7 @@ class FieldFit:
         if upsample:
             self.sync_states()
             planned = resolution_at(state.schedule, step)
-            bound = memory_bound(self.inputs, state)
+            bound = memory_bound(self.inputs, state)  # None where the user set the grid: then no bound applies
             used, reason = refine(self.inputs, state, self.integrator, self.roles, planned, bound,
                                   None if bound is None else cfg.max_samples)
             if used < planned:  # the carved lattice would outgrow max_memory_gib, or its rays max_samples: this
