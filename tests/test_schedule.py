@@ -69,11 +69,11 @@ def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_
         SURVEY["surface_cells"] * ((few + 16) / 64) ** 2
 
 
-def memory_at(res, cells=SURVEY["surface_cells"], pixels=PIXELS, background=False, degree=0):
+def memory_at(res, cells=SURVEY["surface_cells"], pixels=PIXELS, degree=0):
     """The plan's estimate of a fit's peak bytes at ``res``, written out from its constants."""
     from mi_voldis.fit.schedule import BASE_BYTES, BYTES_PER_PIXEL, BYTES_PER_VERTEX, VERTICES_PER_SURFACE_CELL
     vertices = min(cells * (res / 64) ** 2 * VERTICES_PER_SURFACE_CELL, res ** 3)  # at most the dense lattice
-    per_vertex = BYTES_PER_VERTEX[background] * (4.0 if degree == 1 else 1.0)
+    per_vertex = BYTES_PER_VERTEX * (4.0 if degree == 1 else 1.0)
     return BASE_BYTES + BYTES_PER_PIXEL * pixels + vertices * per_vertex
 
 
@@ -81,10 +81,8 @@ def test_affordable_resolution_keeps_the_estimated_memory_within_max_memory_gib(
     cfg = FitConfig().for_backend("llvm")
     r = affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, PIXELS)  # time and pixels buy any grid
     assert memory_at(r) <= cfg.max_memory_gib * 2 ** 30 < memory_at(r + 16)
-    # a background refit keeps both fields: a coarser grid; more memory: a finer one
-    rb = affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, PIXELS, background=True)
-    assert memory_at(rb, background=True) <= cfg.max_memory_gib * 2 ** 30 < memory_at(rb + 16, background=True)
-    assert rb < r < affordable_resolution(cfg.replace(max_memory_gib=16.0), StepCost(1e-6, 64), 1e6, SURVEY, PIXELS)
+    # more memory: a finer grid
+    assert r < affordable_resolution(cfg.replace(max_memory_gib=16.0), StepCost(1e-6, 64), 1e6, SURVEY, PIXELS)
     # surfaces counted everywhere on the coarse grid: the dense lattice's vertices bound the estimate
     everywhere = dict(SURVEY, surface_cells=64 ** 3)
     rd = affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, everywhere, PIXELS)
@@ -311,6 +309,41 @@ def test_the_optimisation_loop_follows_an_end_that_moves(steps):
     assert p.seen == list(range(max(steps, 4))) and [r["step"] for r in log] == list(range(1, max(steps, 4) + 1))
 
 
+def test_the_loop_checkpoints_by_wall_clock_or_by_steps(monkeypatch):
+    """A step taking 10 s of a fake clock: every third step passes 25 s since the last checkpoint; every
+    fourth by steps; the last step checkpoints in both; without either rule, none."""
+    from types import SimpleNamespace
+
+    import mitsuba as mi
+
+    from mi_voldis.optim import loop
+
+    clock = [0.0]
+    monkeypatch.setattr(loop, "time", SimpleNamespace(perf_counter=lambda: clock[0]))
+
+    class Problem:
+        keys = ["x"]
+        params = {"x": mi.Float(1.0)}
+
+        def before_step(self, step):
+            clock[0] += 10.0
+
+        def loss(self, step):
+            return self.params["x"] * self.params["x"], {}
+
+    class NoAdam:
+        def step(self, params, grads, factor):
+            pass
+
+    def saves(**rule):
+        out = []
+        loop.optimize(Problem(), NoAdam(), steps=10, checkpoint=out.append, progress=False, **rule)
+        return out
+    assert saves(checkpoint_seconds=25.0) == [3, 6, 9, 10]
+    assert saves(checkpoint_every=4) == [4, 8, 10]
+    assert saves() == []
+
+
 def calibrated(seconds, samples, steps=200):
     """A fit state just past its calibration steps, each taking ``seconds`` and evaluating ``samples``."""
     from types import SimpleNamespace
@@ -480,7 +513,7 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     assert memory_scale(0) == memory_scale("auto") == 1.0 and memory_scale(1) == 4.0  # 16 floats a vertex, not 4
     cfg = FitConfig().for_backend("llvm")
     cells = 2000.0  # at 64^3
-    r0, r1 = (memory_resolution(cfg, cells, 64, 64, d, PIXELS, False) for d in (0, 1))
+    r0, r1 = (memory_resolution(cfg, cells, 64, 64, d, PIXELS) for d in (0, 1))
     for r, d in ((r0, 0), (r1, 1)):
         assert memory_at(r, cells, degree=d) <= cfg.max_memory_gib * 2 ** 30 < memory_at(r + 16, cells, degree=d)
     assert 64 < r1 < r0

@@ -15,6 +15,7 @@ from mi_voldis.fit.problem import FieldFit
 from mi_voldis.optim.adam import Adam
 from mi_voldis.optim.parameters import PackedParameters
 from mi_voldis.raybank import tile_pixels
+from mi_voldis.regularizers import tv_gradient
 
 
 def random_field(shape=(3, 4, 5), channels=3, seed=0):
@@ -66,11 +67,55 @@ def test_adam_zero_rate_slots_stay_put():
     np.testing.assert_allclose(out[1::2], np.arange(1, 8, 2) - 0.5, rtol=1e-6)
 
 
+def test_adam_on_a_subset_steps_as_the_whole_array_with_a_masked_gradient():
+    """Moments kept for the subset alone, per-slot rates, per-element scales and warm-up: the same values,
+    bit for bit, as Adam on the whole array whose gradient is zero off the subset (which never moves)."""
+    rng = np.random.default_rng(1)
+    n = 40
+    x0 = rng.normal(size=n).astype(np.float32)
+    subset = np.sort(rng.choice(n, 13, replace=False)).astype(np.uint32)
+    scale = rng.uniform(0.5, 2, n).astype(np.float32)
+    whole, part = Adam({"x": [0.1, 0.05]}, warmup=3), Adam({"x": [0.1, 0.05]}, warmup=3)
+    whole.scales["x"] = part.scales["x"] = mi.Float(scale)
+    part.subsets["x"] = mi.UInt32(subset)
+    pw, pp = {"x": mi.Float(x0)}, {"x": mi.Float(x0)}
+    for _ in range(5):
+        g = rng.normal(size=n).astype(np.float32)
+        masked = np.zeros(n, np.float32)
+        masked[subset] = g[subset]
+        whole.step(pw, {"x": mi.Float(masked)})
+        part.step(pp, {"x": mi.Float(g[subset])})
+    np.testing.assert_array_equal(np.array(pp["x"]), np.array(pw["x"]))
+    assert dr.width(part.m["x"]) == len(subset)
+    moved = np.array(pp["x"]) != x0
+    assert moved[subset].all() and not np.delete(moved, subset).any()
+    part.subsets["x"] = mi.UInt32()  # an empty region: nothing moves
+    before = np.array(pp["x"])
+    part.step(pp, {"x": mi.Float(g)})
+    np.testing.assert_array_equal(np.array(pp["x"]), before)
+
+
+@pytest.mark.parametrize("colors", [3, 12])
+def test_tv_gradient_at_some_elements_is_the_whole_gradient_there(colors):
+    """The whole array's gradient (in packets of 4 channels) and the one at chosen elements (one by one)
+    agree bit for bit, at colour degree 0 (width 4) and 1 (width 16)."""
+    rng = np.random.default_rng(2)
+    d, c = rng.normal(0, 1, (5, 6, 7, 1)).astype(np.float32), rng.normal(0, 1, (5, 6, 7, colors)).astype(np.float32)
+    field = mi.load_dict(brick_field_dict(d, c, brick=4))
+    state = field_state.FieldState(field.layout, field.packed, 1 + colors, np.eye(4))
+    neighbours = field_state.neighbour_vertices(state)
+    at = np.sort(rng.choice(dr.width(field.packed), 500, replace=False)).astype(np.uint32)
+    whole = np.array(tv_gradient(field.packed, field.width, neighbours))
+    np.testing.assert_array_equal(np.array(tv_gradient(field.packed, field.width, neighbours, mi.UInt32(at))),
+                                  whole[at])
+
+
 def test_packed_regularisers_match_the_tensor_formulas():
     """On a brick grid with every brick allocated: sparsity on density, TV on every channel group with its
     own weight (the dense formula on each tensor), the hull mask and the density's own mask within it,
     padding and the empty brick untouched. The TV weights are the phase's own (the background refit has
-    its own), not the config's."""
+    its own), not the config's. Within a hull the gradient comes at the hull's elements alone (Adam's
+    subset): scattered back, it is the masked dense one."""
     rng = np.random.default_rng(3)
     d, c = rng.normal(0, 1, (5, 6, 7, 1)).astype(np.float32), rng.normal(0, 1, (5, 6, 7, 12)).astype(np.float32)
     field = mi.load_dict(brick_field_dict(d, c, brick=4))
@@ -86,8 +131,16 @@ def test_packed_regularisers_match_the_tensor_formulas():
                            tv=(tv_density, tv_color),
                            density_hull=mi.Float(shaped),
                            integrator=SimpleNamespace(fields={"full": field}), neighbours={},
-                           state=SimpleNamespace(fields={"full": state}))
+                           state=SimpleNamespace(fields={"full": state}), adam=Adam({}))
+    subset = FieldFit.refit_elements(fake, field)
+    vertices = np.flatnonzero(keep[b3:]) + b3  # the hull's, the empty brick left out
+    np.testing.assert_array_equal(np.array(subset), (vertices[:, None] * 16 + np.arange(16)).ravel())
+    fake.adam.subsets["full.packed"] = subset
     grads = FieldFit.extra_gradients(fake, 4, {"full.packed": dr.zeros(mi.Float, dr.width(field.packed))})
+    assert dr.width(grads["full.packed"]) == dr.width(subset)
+    whole = dr.zeros(mi.Float, dr.width(field.packed))
+    dr.scatter(whole, grads["full.packed"], subset)
+    grads["full.packed"] = whole
     got = bricks.to_dense(np.array(grads["full.packed"]), layout, 16)
     stored = layout.slots * b3  # the means are over stored vertices (the empty brick and padding too)
     td, tc = d[..., 0], c
@@ -111,6 +164,15 @@ def test_packed_regularisers_match_the_tensor_formulas():
     np.testing.assert_allclose(got[..., 1:13], want_c * mask[..., None], rtol=1e-4, atol=1e-8)
     packed = np.array(grads["full.packed"]).reshape(-1, 16)
     assert not packed[:, 13:].any() and not packed[:b3].any()  # padding and the empty brick
+    # without a hull: every element, the whole array's gradient
+    fake.hull = fake.density_hull = None
+    fake.adam.subsets.clear()
+    grads = FieldFit.extra_gradients(fake, 4, {"full.packed": dr.zeros(mi.Float, dr.width(field.packed))})
+    got = bricks.to_dense(np.array(grads["full.packed"]), layout, 16)
+    np.testing.assert_allclose(got[..., 0], want_d, rtol=1e-4, atol=1e-8)
+    np.testing.assert_allclose(got[..., 1:13], want_c, rtol=1e-4, atol=1e-8)
+    packed = np.array(grads["full.packed"]).reshape(-1, 16)
+    assert not packed[:, 13:].any() and not packed[:b3].any()
 
 
 def test_tiles_cover_their_anchor_inside_the_image():

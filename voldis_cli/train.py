@@ -6,7 +6,7 @@
 Writes RUN/ (fields as <role>_grid.npz, scene.xml, config.json, metrics.json, previews/, training.png;
 checkpoints/ while it runs). RUN may not be, hold or lie inside the dataset's files. A killed fit
 leaves RUN.partial: --resume continues it (refused with another dataset or other settings, but
-checkpoint_every and eval_every), --restart discards it. The settings are listed below (defined in
+checkpoint_every, checkpoint_minutes and eval_every), --restart discards it. The settings are listed below (defined in
 mi_voldis/fit/config.py).
 """
 import json

@@ -130,7 +130,7 @@ def allocate_hidden_surface(inputs, state, depth, stride=2):
     return resample(full, None, need | (full.layout.table > 0))
 
 
-def start_harmonic(inputs, state):
+def start_harmonic(inputs, state, depths=None):
     """Background = full field with the object's visual hull inpainted from around it: a harmonic
     extension of density and colour, so surfaces the object hides (the floor under it) continue
     through the hull, except in the object's own voxels (:func:`background_regions`), whose density
@@ -138,13 +138,16 @@ def start_harmonic(inputs, state):
     With ``keep_seen`` only the hull voxels no training view sees unmasked, or within ``keep_seen_gap``
     vertices of the object's, are inpainted; the others keep the full field's values (the fill's
     boundary). Returns the hull, the object's voxels and those inpainted hull voxels
-    (:func:`background_regions`)."""
+    (:func:`background_regions`). ``depths``: the full field's median depth maps by view, read and filled
+    (:func:`~mi_voldis.fit.lift.training_depths`)."""
     if inputs.cfg.hole_carve:  # room for the hidden surface where no training ray ended
         from .lift import training_depths
         state.fields["full"] = allocate_hidden_surface(inputs, state, training_depths(inputs, state, median=True))
+        if depths is not None:  # the depths of the field as it was
+            depths.clear()
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
-    hull, points, obj, refill, solid = background_regions(inputs, state, neighbours, with_solid=True)
+    hull, points, obj, refill, solid = background_regions(inputs, state, neighbours, with_solid=True, depths=depths)
     values = harmonic_fill(full.data, full.width, dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull,
                            neighbours)
     # the object itself: empty, its colour the fill's (:func:`emptied`)
@@ -160,7 +163,7 @@ def voxel_of(field):
     return float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
 
 
-def background_regions(inputs, state, neighbours=None, with_solid=False):
+def background_regions(inputs, state, neighbours=None, with_solid=False, depths=None):
     """The visual hull (Float per stored vertex), its vertices' positions, the object's own voxels
     (Bool) and the hull vertices no training view sees unmasked (Bool, :func:`never_seen`) with those
     within ``keep_seen_gap`` vertices of the object's voxels: the object's soft edge, which views see
@@ -174,11 +177,11 @@ def background_regions(inputs, state, neighbours=None, with_solid=False):
     where the refit continues the background. With ``hole_carve`` the object's voxels also take in the
     unseen hull vertices in front of the surface the object hides or far behind it (:func:`hole_shell`),
     however faint; ``with_solid``: also (5th) the unseen vertices from that surface on, which the
-    background starts opaque (None without ``hole_carve``)."""
+    background starts opaque (None without ``hole_carve``). ``depths``: see :func:`start_harmonic`."""
     from .lift import training_depths
     cfg, full = inputs.cfg, state.fields["full"]
     neighbours = neighbours or neighbour_vertices(full)
-    depth = training_depths(inputs, state, median=True)
+    depth = training_depths(inputs, state, median=True, memo=depths)
     hull, points = hull_region(inputs, full, neighbours, depth)
     raw = dr.gather(mi.Float, full.data, dr.arange(mi.UInt32, full.vertices) * full.width)
     shown, front = masked_ray_cells(inputs, state, list(inputs.ds.masked_train))

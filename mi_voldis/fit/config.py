@@ -59,7 +59,7 @@ class FitConfig(Settings):
     # stepped with the then default rates and TV weights
     ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
-             "lr_views_growth": False, "contract_radius": 1.0}
+             "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -266,7 +266,12 @@ class FitConfig(Settings):
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)
-    checkpoint_every: int = setting(250, "steps between checkpoints", low=1)
+    checkpoint_every: int | None = setting(None, "steps between checkpoints (null: every checkpoint_minutes)",
+                                           low=1)
+    # by time, not steps: a checkpoint writes the fields and their Adam moments (half a GB at 448^3), as costly
+    # at a coarse grid's fast steps as at a fine one's, and on any machine; each phase also ends with one
+    checkpoint_minutes: float = setting(2.0, "minutes of fitting between checkpoints (with checkpoint_every null)",
+                                        above=0)
     eval_every: int = setting(250, "steps between held-out PSNR evaluations for the PSNR-vs-time log", low=1)
     eval_views: int = setting(3, "held-out views rendered for that log", low=0)
     preview_views: int = setting(3, "held-out views written as PNG previews", low=0)

@@ -140,7 +140,7 @@ def memory_bound(inputs, state):
         return None
     channels = max(f.channels for f in state.fields.values())
     degree = 0 if channels <= 4 else 1
-    return affordable_vertices(cfg, inputs.bank.pixels, degree, refits_background(inputs))
+    return affordable_vertices(cfg, inputs.bank.pixels, degree)
 
 
 def refits_background(inputs):

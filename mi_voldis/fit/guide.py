@@ -41,13 +41,14 @@ def inpainting_hole(region, depth, hit, object_mask, ring, nearer=0.9):
     return region | (dilate(region, ring) & hit & (depth < front))
 
 
-def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9):
+def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9, depths=None):
     """The prior's rays: a :class:`~mi_voldis.raybank.RayBank` over the training views (same order as the
     fit's bank, so ray views index the same colour corrections) whose colours are each masked view's
     photo inpainted with ``fill`` (an inpainter of :mod:`mi_voldis.inpaint2d`) in its mask grown by
     ``dilation`` of the diagonal (occluders within ``ring`` of the diagonal left out of the sources,
     :func:`inpainting_hole`), and the flat indices of those masked pixels. Records the inpainter used in
-    ``state.prior`` (metrics.json's ``bg_prior.inpainter``)."""
+    ``state.prior`` (metrics.json's ``bg_prior.inpainter``). ``depths``: the full field's median depth maps
+    by view (NaN where none), read and filled (:func:`~mi_voldis.fit.lift.training_depths`)."""
     ds = inputs.ds
     diag = np.hypot(*ds.size)
     grow, around = int(np.ceil(dilation * diag)), int(np.ceil(ring * diag))
@@ -62,7 +63,12 @@ def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9):
         if v not in masked:
             continue
         region[k] = dilate(ds.masks[v], grow) | (ds.effects[v] if ds.effects is not None else False)
-        depth, hit = median_depth(integrator, ds.cameras[v])
+        if depths is not None and v in depths:
+            depth, hit = np.nan_to_num(depths[v]), np.isfinite(depths[v])
+        else:
+            depth, hit = median_depth(integrator, ds.cameras[v])
+            if depths is not None:
+                depths[v] = np.where(hit, depth, np.nan)
         hole = inpainting_hole(region[k], depth, hit, ds.masks[v], around, nearer)
         images[k] = paint(np.clip(ds.images[v], 0, 1), hole)
     inpainted = dataclasses.replace(ds, images=images, cameras=[ds.cameras[v] for v in train], masks=region,

@@ -151,20 +151,25 @@ def object_ray_keys(inputs, field, views, depth, dilation=0.01, reach=0.9, fract
     return np.unique(np.concatenate(keys))
 
 
-def training_depths(inputs, state, count=24, extra=(), median=False):
+def training_depths(inputs, state, count=24, extra=(), median=False, memo=None):
     """Full-field depth maps of ``count`` training views spread over the set (and of ``extra``); NaN
     where a ray ends on nothing (opacity below a half). The expected depth, or with ``median`` the
-    median (where the transmittance falls to a half: a faint haze in front does not pull it nearer)."""
+    median (where the transmittance falls to a half: a faint haze in front does not pull it nearer).
+    ``memo``: a dict of median depth maps by view, read and filled (while the full field stays as it
+    is, the steps that start the background each ask for these renders)."""
     ds = inputs.ds
     train = list(ds.train)
     pick = np.unique(np.linspace(0, len(train) - 1, min(count, len(train))).round().astype(int))
     views = sorted(set(train[k] for k in pick) | set(extra))
     integrator = fit_integrator(inputs, state)
+    memo = {} if memo is None or not median else memo
     out = {}
     for u in views:
         if median:
-            depth, hit = median_depth(integrator, ds.cameras[u])
-            out[u] = np.where(hit, depth, np.nan)
+            if u not in memo:
+                depth, hit = median_depth(integrator, ds.cameras[u])
+                memo[u] = np.where(hit, depth, np.nan)
+            out[u] = memo[u]
         else:
             _, alpha, depth = render_camera(integrator, ds.cameras[u], ("full",))["full"]
             out[u] = np.where(alpha > 0.5, depth, np.nan)

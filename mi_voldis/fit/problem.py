@@ -67,6 +67,9 @@ class FieldFit:
             self.adam.lrs[f"{r}.packed"] = self.params.per_slot(r, *self.rates)
             self.adam.scales.pop(f"{r}.packed", None)
             self.adam.growth.pop(f"{r}.packed", None)
+            self.adam.subsets.pop(f"{r}.packed", None)
+            if self.hull is not None:  # Adam keeps moments for the region's vertices alone
+                self.adam.subsets[f"{r}.packed"] = self.refit_elements(self.integrator.fields[r])
             if self.view_rates and not self.final_stage(r):  # the lattice may have changed: views counted anew
                 cfg, f = self.inputs.cfg, self.state.fields[r]
                 scale = view_rate_scale(self.inputs.space, f, cameras, cfg.lr_views, cfg.lr_views_quantile)
@@ -84,6 +87,18 @@ class FieldFit:
             self.integrator.use_occupancy(self.state.occupancy)
         elif self.state.occupancy_on:
             self.update_occupancy()
+
+    def refit_elements(self, field):
+        """The packed elements of ``field`` a refit masked to ``hull`` may change (UInt32, ascending): every
+        slot of the vertices where ``hull`` is not 0, but the empty brick's (slot 0, which stands for every
+        unallocated brick). Elsewhere the masked gradient is zero, so Adam would never move them. Empty
+        where the hull is."""
+        inside = (self.hull != 0.0) & (dr.arange(mi.UInt32, dr.width(self.hull)) >= field.layout.vertices_per_brick)
+        vertices = dr.compress(inside)
+        if dr.width(vertices) == 0:
+            return mi.UInt32()
+        return dr.repeat(vertices, field.width) * field.width + dr.tile(dr.arange(mi.UInt32, field.width),
+                                                                         dr.width(vertices))
 
     def final_stage(self, role):
         """Whether the field of ``role`` is at the planned schedule's last resolution and ``lr_views_final``
@@ -198,20 +213,27 @@ class FieldFit:
                 continue
             values = dr.detach(self.params[key])
             vertices = dr.width(values) // f.width
-            channel = dr.arange(mi.UInt32, dr.width(values)) % f.width
-            g = grads[key] + dr.select(channel == 0, sparsity_gradient(values, cfg.sparsity / vertices), 0.0)
-            # the empty brick (slot 0) stands for every unallocated brick: it never changes
-            g = dr.select(dr.arange(mi.UInt32, dr.width(values)) < f.layout.vertices_per_brick * f.width, 0.0, g)
+            subset = self.adam.subsets.get(key)  # inside the hull: the gradient at its elements alone
+            if subset is not None and dr.width(subset) == 0:  # an empty hull: nothing to step
+                continue
+            index = dr.arange(mi.UInt32, dr.width(values)) if subset is None else subset
+            channel = index % f.width
+            g = grads[key] if subset is None else dr.gather(mi.Float, grads[key], subset)
+            own = values if subset is None else dr.gather(mi.Float, values, subset)
+            g = g + dr.select(channel == 0, sparsity_gradient(own, cfg.sparsity / vertices), 0.0)
+            if subset is None:  # the empty brick (slot 0) stands for every unallocated brick: it never changes
+                g = dr.select(index < f.layout.vertices_per_brick * f.width, 0.0, g)
             if tv:  # tv_gradient averages over every slot: rescale to per-vertex means of each channel group
                 if r not in self.neighbours:
                     self.neighbours[r] = neighbour_vertices(self.state.fields[r])
                 weights = self.params.per_slot(r, tv * self.tv[0] * f.width,
                                                tv * self.tv[1] * f.width / (f.channels - 1))
                 weight = dr.gather(mi.Float, from_numpy(mi.Float, weights), channel)
-                g = g + weight * tv_gradient(values, f.width, self.neighbours[r])
-            if self.hull is not None:  # refit only inside the hull
-                g = g * dr.repeat(self.hull, f.width)
+                g = g + weight * tv_gradient(values, f.width, self.neighbours[r], subset)
+            if self.hull is not None:  # refit only inside the hull (a weight per vertex)
+                vertex = index // f.width
+                g = g * dr.gather(mi.Float, self.hull, vertex)
                 if self.density_hull is not None:
-                    g = dr.select(channel == 0, g * dr.repeat(self.density_hull, f.width), g)
+                    g = dr.select(channel == 0, g * dr.gather(mi.Float, self.density_hull, vertex), g)
             grads[key] = g
         return grads

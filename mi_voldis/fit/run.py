@@ -25,7 +25,8 @@ from .train import fit
 
 PREVIEW = "previews"
 CHECKPOINT = os.path.join("checkpoints", "last.npz")
-MAY_CHANGE = ("checkpoint_every", "eval_every")  # settings a resumed fit may change: they shape no result
+# settings a resumed fit may change: they shape no result
+MAY_CHANGE = ("checkpoint_every", "checkpoint_minutes", "eval_every")
 
 
 def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto", holdout=8, keep_checkpoints=False,

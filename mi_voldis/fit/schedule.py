@@ -198,12 +198,13 @@ def stages(cfg, coarse, final):
 # A fit's peak memory (reports/notes.md, 2026-11-27): a base that grows with the training pixels (the photos,
 # the ray bank: about 400 MiB and 30 bytes a pixel, fern 0.3 and garden 1.5 GiB before any grid) and a share per
 # stored vertex of the fitted fields at colour degree 0: the values, their Adam moments and gradient, the TV's
-# neighbour table and the step's temporaries Dr.Jit's allocator keeps, 296-307 bytes measured on fern and horns
-# (304^3 to 432^3); where a background is refitted after the full field, both fields live at once: 424-466 on the
-# removal family. A few percent above the worst of each:
+# neighbour table and gradient and the step's temporaries Dr.Jit's allocator keeps, 296-326 bytes measured on fern,
+# horns and the statue (304^3 to 448^3). The full phase is the peak: the background refit after it holds the
+# full field's values beside its own but steps the object's region alone (Adam's ``subsets``), and each phase
+# starts with Dr.Jit's allocation cache released. A few percent above the worst:
 BASE_BYTES = 400 * 2 ** 20
 BYTES_PER_PIXEL = 30
-BYTES_PER_VERTEX = {False: 320, True: 480}  # without / with the background refit
+BYTES_PER_VERTEX = 336
 # Stored vertices per effective surface cell of the final grid, for the plan: fern 55-66 (416^3-528^3), horns
 # 81-87 (432^3-544^3), the removal family 55-195, the statue 150, garden 286 (reports/notes.md). The plan takes
 # about the lowest: every stage then counts its own vertices before it allocates them
@@ -223,14 +224,14 @@ def memory_scale(sh_degree):
     return packet_width(1 + 3 * (degree + 1) ** 2) / packet_width(4)
 
 
-def affordable_vertices(cfg, pixels, sh_degree, background):
+def affordable_vertices(cfg, pixels, sh_degree):
     """Stored vertices a fit can hold within ``max_memory_gib``: what the base of ``pixels`` training pixels
-    leaves, at BYTES_PER_VERTEX[``background``] memory_scale(``sh_degree``) bytes each (0 when nothing is left)."""
+    leaves, at BYTES_PER_VERTEX memory_scale(``sh_degree``) bytes each (0 when nothing is left)."""
     free = cfg.max_memory_gib * 2 ** 30 - BASE_BYTES - BYTES_PER_PIXEL * pixels
-    return max(0.0, free / (BYTES_PER_VERTEX[bool(background)] * memory_scale(sh_degree)))
+    return max(0.0, free / (BYTES_PER_VERTEX * memory_scale(sh_degree)))
 
 
-def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree, pixels, background):
+def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree, pixels):
     """The finest resolution R (a multiple of 16, at least ``coarse``) whose estimated vertices fit in
     :func:`affordable_vertices`: ``surface_cells`` (R / surface_resolution)^2 cells of
     VERTICES_PER_SURFACE_CELL each, but never more than the dense lattice's R^3 (surfaces counted on a
@@ -238,7 +239,7 @@ def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree,
     cameras look at had 49,797 effective cells at 64^3, an estimate of 7.8 M vertices at 80^3, where the
     whole lattice holds 0.51 M)."""
     cells = surface_cells * (coarse / surface_resolution) ** 2  # at the coarse resolution
-    vertices = affordable_vertices(cfg, pixels, sh_degree, background)
+    vertices = affordable_vertices(cfg, pixels, sh_degree)
     return max(_finest(coarse, (vertices / VERTICES_PER_SURFACE_CELL / cells) ** 0.5),
                _finest(coarse, vertices ** (1 / 3) / coarse))
 
@@ -248,7 +249,7 @@ def _finest(coarse, ratio):
     return int(max(coarse, 16 * np.floor(coarse * ratio / 16)))
 
 
-def resolution_bounds(cfg, cost, budget_seconds, survey, pixels, background=False):
+def resolution_bounds(cfg, cost, budget_seconds, survey, pixels):
     """The finest resolution R (a multiple of 16, at least the coarse one, ``cost.resolution``) each rule
     allows: {"observations": R whose last stage (its share of the budget, stage_starts[-1] to the end)
     still ends ``min_observations`` training rays in each cell where rays end, a step at R costing
@@ -256,9 +257,8 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels, background=Fals
     cells (``survey``: :func:`capture_survey`); "pixels": R whose surface cells are no more than the
     ``pixels`` training pixels that end on them over ``pixels_per_voxel``^2 (a cell no pixel ends in has
     nothing to fit); "memory": R whose estimated peak memory stays within ``max_memory_gib``
-    (:func:`memory_resolution`, at the colour degree ``sh_degree`` asks, with a ``background`` refit or
-    not)}. Rays, not passes over the pixels, are the currency: a capture with more views buys the same
-    grid or a finer one.
+    (:func:`memory_resolution`, at the colour degree ``sh_degree`` asks)}. Rays, not passes over the
+    pixels, are the currency: a capture with more views buys the same grid or a finer one.
 
         steps(R) = share budget / cost(R),   rays(R) = steps(R) batch hits
         rays(R) / (cells (R / R_s)^2) >= min_observations
@@ -274,12 +274,12 @@ def resolution_bounds(cfg, cost, budget_seconds, survey, pixels, background=Fals
     return {"observations": int(grid[seen].max()) if seen.any() else int(coarse),
             "pixels": _finest(coarse, (pixels * survey["ray_hits"] / cfg.pixels_per_voxel ** 2 / cells) ** 0.5),
             "memory": memory_resolution(cfg, survey["surface_cells"], survey["surface_resolution"], coarse,
-                                        cfg.sh_degree, pixels, background)}
+                                        cfg.sh_degree, pixels)}
 
 
-def affordable_resolution(cfg, cost, budget_seconds, survey, pixels, background=False):
+def affordable_resolution(cfg, cost, budget_seconds, survey, pixels):
     """The finest resolution all rules of :func:`resolution_bounds` allow."""
-    return min(resolution_bounds(cfg, cost, budget_seconds, survey, pixels, background).values())
+    return min(resolution_bounds(cfg, cost, budget_seconds, survey, pixels).values())
 
 
 def steps_for(plan_stages, cost, budget_seconds):

@@ -399,14 +399,16 @@ def shadow_masks(light, occluder, cameras, masks, depths, grow):
     return np.stack(out)
 
 
-def find_shadow(inputs, state, views=12):
+def find_shadow(inputs, state, views=12, depths=None):
     """The object's shadow as effect masks (N, H, W) bool on the masked training views of ``inputs``'
     dataset (False elsewhere), grown by ``GROW``, from the full field's median depths of every masked
     training view, ``views`` of them spread over the set scored; None when no light passes
-    ``shadow_contrast``. Also returns the light's record."""
+    ``shadow_contrast``. Also returns the light's record. ``depths``: the full field's median depth maps
+    by view, read and filled (:func:`~mi_voldis.fit.lift.training_depths`)."""
     from .lift import training_depths
     ds = inputs.ds
-    return shadow_of_depths(ds, inputs.cfg, training_depths(inputs, state, count=len(ds.train), median=True), views)
+    return shadow_of_depths(ds, inputs.cfg, training_depths(inputs, state, count=len(ds.train), median=True,
+                                                            memo=depths), views)
 
 
 def shadow_of_depths(ds, cfg, depth, views=12):

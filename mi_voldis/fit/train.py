@@ -124,14 +124,16 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         fit_full(inputs, state, roles, scratch, checkpoint_at("full"))
         state.adam.reset()
         state.save(checkpoint, "bg", 0)
+        dr.flush_malloc_cache()  # the full phase's arrays, cached by Dr.Jit's allocator: the refit's differ in size
 
     if state.phase == "bg" and has_masks and not scratch:
         t0 = time.perf_counter()
         harmonic = cfg.bg_strategy in ("harmonic", "guided")
         regions = None
+        depths = {}  # the full field's median depth maps by view: its regions, shadow and prior each ask for them
         if "bg" not in state.fields or state.hull_points is None:
             if harmonic:
-                regions = start_harmonic(inputs, state)
+                regions = start_harmonic(inputs, state, depths)
             else:
                 state.prior_keys = start_cleared(inputs, state)
                 state.prior = {"vertices_emptied": int(len(state.prior_keys))}
@@ -143,7 +145,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         shaped = None  # where the density may change, if not wherever the colour may
         if harmonic:  # the object's own voxels stay empty
             if regions is None:
-                hull, _, obj, refill = background_regions(inputs, state)
+                hull, _, obj, refill = background_regions(inputs, state, depths=depths)
             else:
                 hull, obj, refill = regions
             free = dr.select(obj, 0.0, hull)
@@ -153,7 +155,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
             free = cleared_region(inputs, state)
         effects = dataset.effects if cfg.bg_strategy == "guided" else None
         if effects is None and cfg.bg_strategy == "guided" and cfg.shadow_contrast > 0:
-            effects, light = find_shadow(inputs, state)  # the object's shadow, from its shape and the photos
+            effects, light = find_shadow(inputs, state, depths=depths)  # the object's shadow, from its shape
             state.prior = {**(state.prior or {}), "shadow": light}
             if effects is not None:
                 inputs = dataclasses.replace(inputs, ds=dataclasses.replace(dataset, effects=effects))
@@ -165,14 +167,15 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
             shaped = free if shaped is None else shaped
             free = dr.select(effect_cells(inputs, state), 1.0, free)
         pool = background_ray_pool(dataset, inputs.bank, cfg.bg_ray_dilation, effects)
-        prior = (colour_prior(inputs, state, inpainter or cfg.prior_inpainter)
+        prior = (colour_prior(inputs, state, inpainter or cfg.prior_inpainter, depths=depths)
                  if cfg.bg_strategy == "guided" and cfg.prior_weight > 0 else None)
+        dr.flush_malloc_cache()  # what the regions, the shadow search and the prior left cached
         problem = FieldFit(inputs, state, ("bg",), ("bg",), inputs.bank, pool=pool, hull=free, phase=1,
                            schedule=False, prior=prior, density_hull=shaped, rates=(cfg.bg_lr_density, cfg.bg_lr_color),
                            tv=(cfg.bg_tv_density, cfg.bg_tv_color))
         optimize(problem, state.adam, steps=cfg.steps_bg, start=state.step, final_ratio=cfg.lr_final_ratio,
                  log=state.log, desc="bg refit", checkpoint=checkpoint_at("bg")(problem),
-                 checkpoint_every=cfg.checkpoint_every, progress=progress)
+                 **checkpoints(cfg), progress=progress)
         problem.sync_states()
         state.phase_times["bg"] = state.phase_times.get("bg", 0.0) + time.perf_counter() - t0
     if "bg" not in state.fields:  # no masks: nothing to disentangle, the background is the full scene
@@ -181,6 +184,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     if has_masks:
         cleared = cleared_region(inputs, state) > 0 if cfg.bg_strategy in ("clear", "lift") else None
         state.empty_color_fraction = clear_empty_background_color(inputs, state, cleared)
+    dr.flush_malloc_cache()  # the checkpoint, the evaluation and the export that follow allocate arrays of other sizes
     state.save(checkpoint, "done", 0)
     return inputs, state
 
@@ -223,7 +227,7 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
     problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True, view_rates=True)
     problem.on_stage = lambda step: replan(state, step)
     eval_fn = held_out_psnr(inputs, problem)
-    common = dict(log=state.log, checkpoint=checkpoint(problem), checkpoint_every=cfg.checkpoint_every, eval_fn=eval_fn,
+    common = dict(log=state.log, checkpoint=checkpoint(problem), **checkpoints(cfg), eval_fn=eval_fn,
                   eval_every=cfg.eval_every, progress=inputs.progress)
     if state.steps_full is None:
         optimize(problem, state.adam, steps=cfg.calibration_steps, start=state.step, final_ratio=1.0,
@@ -250,6 +254,14 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
     state.phase_times["full"] = state.phase_times.get("full", 0.0) + time.perf_counter() - t0
 
 
+def checkpoints(cfg):
+    """When :func:`~mi_voldis.optim.loop.optimize` checkpoints: every ``checkpoint_every`` steps where set,
+    else every ``checkpoint_minutes``."""
+    if cfg.checkpoint_every is not None:
+        return {"checkpoint_every": cfg.checkpoint_every}
+    return {"checkpoint_seconds": 60.0 * cfg.checkpoint_minutes}
+
+
 def cap_for_sh_degree(inputs, state, degree):
     """Degree-1 colour chosen after the plan (``sh_degree`` 'auto'), which was bounded in memory at
     degree 0: stages finer than the memory bound at ``degree`` (:func:`memory_resolution`) take that
@@ -258,7 +270,7 @@ def cap_for_sh_degree(inputs, state, degree):
     if cfg.resolution != "auto" or "surface_cells" not in plan:
         return
     cap = memory_resolution(cfg, plan["surface_cells"], plan["surface_resolution"], state.schedule[0][1], degree,
-                            inputs.bank.pixels, refits_background(inputs))
+                            inputs.bank.pixels)
     if all(r <= cap for _, r in state.schedule):
         return
     state.schedule = capped(state.schedule, cap)
@@ -319,7 +331,7 @@ def plan_schedule(inputs, state, integrator):
         state.plan.update(minutes=float(minutes), coarse_step_seconds=float(cost.at(coarse)), host_ms=cfg.host_ms,
                           budget_seconds=minutes * 60.0 * full_share)
         if survey is not None and survey["surface_cells"]:
-            bounds = resolution_bounds(cfg, cost, budget, survey, inputs.bank.pixels, refits_background(inputs))
+            bounds = resolution_bounds(cfg, cost, budget, survey, inputs.bank.pixels)
             state.plan.update(resolution_bounds=bounds, affordable_resolution=min(bounds.values()))
             final = min(final, state.plan["affordable_resolution"])
     state.plan["final_resolution"] = int(final)

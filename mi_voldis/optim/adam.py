@@ -11,6 +11,10 @@ first, sign-like Adam steps after a grid is resampled do not jolt it. ``scales[k
 as wide as the parameter that multiplies its step element by element (learning rates per vertex:
 Adam's step is invariant to the scale of a gradient, so scaling the gradient would not do);
 ``growth[key]``, where set: the same, but only on the steps that increase an element.
+``subsets[key]``, where set: the UInt32 indices of the only elements that may change (a refit inside a
+region): the moments are kept for them alone and ``grads[key]`` holds the gradient at them, in their order.
+Elements whose gradient is always zero never move under Adam (their moments stay zero), so this steps
+exactly as the whole array with the gradient masked to the subset would, on memory and time of its size.
 """
 import drjit as dr
 import mitsuba as mi
@@ -26,6 +30,7 @@ class Adam:
         self.m, self.v, self.t = {}, {}, {}
         self.scales = {}  # key -> Float: per-element factors on the step (they follow the lattice, not the moments)
         self.growth = {}  # key -> Float: per-element factors on the steps that increase an element
+        self.subsets = {}  # key -> UInt32: the elements stepped, the gradient given at them alone
 
     def reset(self, key=None):
         """Forget the moments (of one parameter, or all): e.g. after a grid is resampled."""
@@ -43,6 +48,9 @@ class Adam:
                 continue
             x = params[key]
             g = dr.detach(grads[key])
+            subset = self.subsets.get(key)
+            if subset is not None and dr.width(subset) == 0:  # nothing may change
+                continue
             if key not in self.m or dr.width(self.m[key]) != dr.width(g):
                 # opaque zeros: the first update then runs the same kernel as every later one
                 self.m[key], self.v[key] = dr.opaque(mi.Float, 0.0, dr.width(g)), dr.opaque(mi.Float, 0.0, dr.width(g))
@@ -56,21 +64,31 @@ class Adam:
             # kernel: else the update kernel would compile anew at every step
             step = dr.opaque(mi.Float, scale * ramp * np.sqrt(1 - self.beta2 ** t) / (1 - self.beta1 ** t))
             eps = dr.opaque(mi.Float, self.eps * np.sqrt(1 - self.beta2 ** t))
+            index = dr.arange(mi.UInt32, dr.width(g)) if subset is None else subset
             if np.ndim(lr):  # per-slot rates, periodic along the array
-                slot = dr.arange(mi.UInt32, dr.width(g)) % len(lr)
-                step = dr.gather(mi.Float, from_numpy(mi.Float, lr), slot) * step
+                step = dr.gather(mi.Float, from_numpy(mi.Float, lr), index % len(lr)) * step
             else:
                 step = lr * step
             if key in self.scales:
-                step = self.scales[key] * step
+                step = self._at(self.scales[key], subset) * step
             update = self.m[key] * (step / (dr.sqrt(self.v[key]) + eps))
             if key in self.growth:  # x - update grows where update < 0
-                update = dr.select(update < 0.0, update * self.growth[key], update)
-            if isinstance(x, mi.TensorXf):
-                params[key] = mi.TensorXf(dr.detach(x.array) - update, x.shape)
-            else:
-                params[key] = dr.detach(x) - update
+                update = dr.select(update < 0.0, update * self._at(self.growth[key], subset), update)
+            flat = dr.detach(x.array if isinstance(x, mi.TensorXf) else x)
+            if subset is None:
+                flat = flat - update
+            else:  # the stepped elements first, then written into a copy of the array
+                stepped = dr.gather(mi.Float, flat, subset) - update
+                dr.eval(stepped, self.m[key], self.v[key])
+                flat = mi.Float(flat)
+                dr.scatter(flat, stepped, subset)
+            params[key] = mi.TensorXf(flat, x.shape) if isinstance(x, mi.TensorXf) else flat
             dr.schedule(params[key], self.m[key], self.v[key])
+
+    @staticmethod
+    def _at(values, subset):
+        """Per-element ``values`` at the stepped elements (all of them without a ``subset``)."""
+        return values if subset is None else dr.gather(mi.Float, values, subset)
 
     def state(self):
         """{'m/key': array, 'v/key': array} and {'key': t} for checkpoints."""

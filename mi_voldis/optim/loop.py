@@ -31,16 +31,19 @@ def decay(step, steps, final_ratio):
 
 
 def optimize(problem, adam, *, steps, start=0, final_ratio=0.1, log=None, desc="optimise", checkpoint=None,
-             checkpoint_every=0, eval_fn=None, eval_every=0, progress=True):
+             checkpoint_every=0, checkpoint_seconds=None, eval_fn=None, eval_every=0, progress=True):
     """Run ``problem`` from ``start`` to ``steps`` (a number, or a function giving it, read again every
     step: a schedule may stretch or shrink while it runs). ``checkpoint(step)`` is called every
-    ``checkpoint_every`` steps and at the end; ``eval_fn(step)`` -> dict every ``eval_every`` steps
-    (merged into the log). Returns the log (a list of dicts, one per logged step)."""
+    ``checkpoint_every`` steps, or with ``checkpoint_seconds`` after the first step that ends that many
+    seconds (wall clock) after the last checkpoint or the start, and at the end; ``eval_fn(step)`` -> dict
+    every ``eval_every`` steps (merged into the log). Returns the log (a list of dicts, one per logged
+    step)."""
     log = [] if log is None else log
     elapsed = log[-1]["time"] if log else 0.0
     end = steps if callable(steps) else (lambda: steps)
     bar = Progress(end() - start, desc, progress)  # a bar on a terminal, lines in a log
     step = start - 1
+    saved = time.perf_counter()
     while step + 1 < end():
         step += 1
         bar.total = end() - start
@@ -72,8 +75,11 @@ def optimize(problem, adam, *, steps, start=0, final_ratio=0.1, log=None, desc="
         log.append(row)
         bar.update(1)
         bar.set_postfix({k: f"{row[k]:.4g}" for k in ("loss", "psnr", "msps") if k in row})
-        if checkpoint is not None and checkpoint_every and ((step + 1) % checkpoint_every == 0 or step + 1 == end()):
+        due = (checkpoint_every and (step + 1) % checkpoint_every == 0) or step + 1 == end() or (
+            checkpoint_seconds is not None and time.perf_counter() - saved >= checkpoint_seconds)
+        if checkpoint is not None and (checkpoint_every or checkpoint_seconds is not None) and due:
             checkpoint(step + 1)
+            saved = time.perf_counter()
     bar.close()
     return log
 

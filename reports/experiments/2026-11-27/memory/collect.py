@@ -18,8 +18,11 @@ def main(out, command, note, *pairs):
         row = {k: m[k] for k in KEYS if k in m}
         row.update(steps=m["schedule"]["steps_full"], stages=m["schedule"]["stages"], plan=m["schedule"]["plan"])
         runs[name] = row
-    with open(out, "w") as f:
-        json.dump({"command": command, "note": note, "runs": runs}, f, indent=1)
+    try:
+        with open(out, "x") as f:  # never over a report already written
+            json.dump({"command": command, "note": note, "runs": runs}, f, indent=1)
+    except FileExistsError:
+        sys.exit(f"{out}: exists, not overwritten")
 
 
 if __name__ == "__main__":
