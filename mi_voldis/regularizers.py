@@ -17,8 +17,8 @@ def tv_gradient(values, width, neighbours, at=None):
     neighbour there): 2 (2 t[v] - t[v + e] - t[v - e]) summed over axes, divided by n; at the elements
     ``at`` (UInt32 indices into ``values``, in their order) where given, else at every element."""
     n = dr.width(values)
-    if at is None and width % 4 == 0:  # whole vertices: each neighbour index read once, channels 4 at a time
-        return _tv_packets(values, width, neighbours)
+    if at is None and width % 4 == 0:
+        return add_tv_gradient(dr.zeros(mi.Float, n), values, width, neighbours, [1.0] * width)
     i = dr.arange(mi.UInt32, n) if at is None else at
     vertex, channel = i // width, i % width
     centre = dr.gather(mi.Float, values, i)
@@ -28,18 +28,25 @@ def tv_gradient(values, width, neighbours, at=None):
     return out * (1.0 / n)
 
 
-def _tv_packets(values, width, neighbours):
-    """:func:`tv_gradient` at every element, in packets of 4 channels (the same sums in the same order)."""
-    n, packets = dr.width(values), width // 4
+def add_tv_gradient(out, values, width, neighbours, weights):
+    """``out`` (a Float as wide as ``values``) plus ``weights[c]`` times the TV gradient of channel c
+    (:func:`tv_gradient`) at every element, ``weights`` a number per slot of a vertex. Whole vertices are
+    read in packets of 4 channels, each neighbour index once, and added into ``out`` in place where
+    nothing else holds it (no array as wide as the grid for the TV alone)."""
+    n = dr.width(values)
+    if width % 4:
+        return out + dr.gather(mi.Float, mi.Float(weights), dr.arange(mi.UInt32, n) % width) * tv_gradient(
+            values, width, neighbours, dr.arange(mi.UInt32, n))
+    packets = width // 4
     vertex = dr.arange(mi.UInt32, n // width)
     others = [dr.gather(mi.UInt32, nb, vertex) * packets for nb in neighbours]
-    out = dr.zeros(mi.Float, n)
     for k in range(packets):
         centre = dr.gather(mi.Vector4f, values, vertex * packets + k)
         total = mi.Vector4f(0.0)
         for other in others:
             total += 2.0 * (centre - dr.gather(mi.Vector4f, values, other + k))
-        dr.scatter(out, total * (1.0 / n), vertex * packets + k)
+        scale = mi.Vector4f(*(float(w) / n for w in weights[4 * k:4 * k + 4]))
+        dr.scatter_add(out, total * scale, vertex * packets + k)
     return out
 
 

@@ -15,7 +15,7 @@ from mi_voldis.fit.problem import FieldFit
 from mi_voldis.optim.adam import Adam
 from mi_voldis.optim.parameters import PackedParameters
 from mi_voldis.raybank import tile_pixels
-from mi_voldis.regularizers import tv_gradient
+from mi_voldis.regularizers import add_tv_gradient, tv_gradient
 
 
 def random_field(shape=(3, 4, 5), channels=3, seed=0):
@@ -108,6 +108,22 @@ def test_tv_gradient_at_some_elements_is_the_whole_gradient_there(colors):
     whole = np.array(tv_gradient(field.packed, field.width, neighbours))
     np.testing.assert_array_equal(np.array(tv_gradient(field.packed, field.width, neighbours, mi.UInt32(at))),
                                   whole[at])
+
+
+@pytest.mark.parametrize("colors", [3, 12])
+def test_tv_added_in_packets_is_the_weighted_gradient_added(colors):
+    """``add_tv_gradient`` adds weight[channel] times the TV gradient to what it is given."""
+    rng = np.random.default_rng(4)
+    d, c = rng.normal(0, 1, (5, 6, 7, 1)).astype(np.float32), rng.normal(0, 1, (5, 6, 7, colors)).astype(np.float32)
+    field = mi.load_dict(brick_field_dict(d, c, brick=4))
+    state = field_state.FieldState(field.layout, field.packed, 1 + colors, np.eye(4))
+    neighbours = field_state.neighbour_vertices(state)
+    n, width = dr.width(field.packed), field.width
+    weights = list(rng.uniform(0.5, 2.0, width))
+    base = rng.normal(size=n).astype(np.float32)
+    got = np.array(add_tv_gradient(mi.Float(base), field.packed, width, neighbours, weights))
+    want = base + np.tile(weights, n // width) * np.array(tv_gradient(field.packed, width, neighbours))
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-7)
 
 
 def test_packed_regularisers_match_the_tensor_formulas():

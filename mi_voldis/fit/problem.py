@@ -11,7 +11,7 @@ from ..device import from_numpy
 from ..field_state import neighbour_vertices
 from ..losses import background_loss, distortion_loss, full_loss
 from ..optim.parameters import PackedParameters
-from ..regularizers import sparsity_gradient, tv_gradient
+from ..regularizers import add_tv_gradient, sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
 from .fields import fit_integrator, memory_bound, occupancy_resolution, occupancy_sigma, refine
 from .observed import view_rate_scale
@@ -218,18 +218,28 @@ class FieldFit:
                 continue
             index = dr.arange(mi.UInt32, dr.width(values)) if subset is None else subset
             channel = index % f.width
-            g = grads[key] if subset is None else dr.gather(mi.Float, grads[key], subset)
-            own = values if subset is None else dr.gather(mi.Float, values, subset)
-            g = g + dr.select(channel == 0, sparsity_gradient(own, cfg.sparsity / vertices), 0.0)
-            if subset is None:  # the empty brick (slot 0) stands for every unallocated brick: it never changes
-                g = dr.select(index < f.layout.vertices_per_brick * f.width, 0.0, g)
+            weights = None
             if tv:  # tv_gradient averages over every slot: rescale to per-vertex means of each channel group
                 if r not in self.neighbours:
                     self.neighbours[r] = neighbour_vertices(self.state.fields[r])
                 weights = self.params.per_slot(r, tv * self.tv[0] * f.width,
                                                tv * self.tv[1] * f.width / (f.channels - 1))
-                weight = dr.gather(mi.Float, from_numpy(mi.Float, weights), channel)
-                g = g + weight * tv_gradient(values, f.width, self.neighbours[r], subset)
+            if subset is None:
+                g = grads[key]
+                if weights is not None:  # the parameter lets go of its gradient, so the TV adds into it in place
+                    dr.eval(g)  # every contribution of the backward pass in first (a resumed fit differed without)
+                    dr.disable_grad(self.params[key])
+                    g = add_tv_gradient(g, values, f.width, self.neighbours[r], weights)
+                g = g + dr.select(channel == 0, sparsity_gradient(values, cfg.sparsity / vertices), 0.0)
+                # the empty brick (slot 0) stands for every unallocated brick: it never changes
+                g = dr.select(index < f.layout.vertices_per_brick * f.width, 0.0, g)
+            else:
+                g = dr.gather(mi.Float, grads[key], subset)
+                own = dr.gather(mi.Float, values, subset)
+                g = g + dr.select(channel == 0, sparsity_gradient(own, cfg.sparsity / vertices), 0.0)
+                if weights is not None:
+                    weight = dr.gather(mi.Float, from_numpy(mi.Float, weights), channel)
+                    g = g + weight * tv_gradient(values, f.width, self.neighbours[r], subset)
             if self.hull is not None:  # refit only inside the hull (a weight per vertex)
                 vertex = index // f.width
                 g = g * dr.gather(mi.Float, self.hull, vertex)
