@@ -222,3 +222,26 @@ def test_bench_rays_are_reproducible_and_tiles_are_coherent():
     assert (o.reshape(-1, TILE * TILE, 3) == o[::TILE * TILE, None]).all()  # one camera per tile
     spread = np.degrees(np.arccos(np.clip(np.sum(tiles * tiles[:, :1], axis=2), -1, 1))).max()
     assert spread < 1.0  # a tile spans a few pixels of a 45-degree, 256-pixel view
+
+
+def test_after_every_step_the_fit_state_holds_the_values_adam_made(tiny_dataset, tmp_path, monkeypatch):
+    """The state's fields are the arrays the march reads after each step, not the values of the last
+    occupancy update (a stale copy would hold a grid's worth of memory at the step's peak)."""
+    from conftest import TINY_FIT
+
+    from mi_voldis.fit.config import FitConfig
+    from mi_voldis.fit.run import run_fit
+    seen = []
+    after = FieldFit.after_step
+
+    def check(self, step):
+        after(self, step)
+        for r in self.roles:
+            seen.append((self.state.fields[r].data is self.integrator.fields[r].packed,
+                         np.array_equal(np.array(self.state.fields[r].data),
+                                        np.array(self.params[f"{r}.packed"]))))
+
+    monkeypatch.setattr(FieldFit, "after_step", check)
+    run_fit(tiny_dataset, str(tmp_path / "run"), FitConfig.from_sources(None, TINY_FIT), progress=False)
+    assert len(seen) > 60  # every step of both phases
+    assert all(same and equal for same, equal in seen)

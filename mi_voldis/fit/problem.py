@@ -158,6 +158,9 @@ class FieldFit:
     def after_step(self, step):
         if self.fit_exposure:  # shared corrections belong to the scene's colours (mi_voldis.exposure)
             self.params["exposure"] = exposure.centre(self.params["exposure"])
+        # the state holds the values Adam just made, not the ones before them: a stale copy of every field
+        # would stay alive until the next occupancy update (a grid's worth of memory at the step's peak)
+        self.sync_states()
 
     # -- loss
     def loss(self, step):
@@ -222,6 +225,9 @@ class FieldFit:
             if tv:  # tv_gradient averages over every slot: rescale to per-vertex means of each channel group
                 if r not in self.neighbours:
                     self.neighbours[r] = neighbour_vertices(self.state.fields[r])
+                    # building the table leaves blocks of sizes no step allocates in Dr.Jit's cache, held
+                    # for the whole stage: give them back
+                    dr.flush_malloc_cache()
                 weights = self.params.per_slot(r, tv * self.tv[0] * f.width,
                                                tv * self.tv[1] * f.width / (f.channels - 1))
             if subset is None:

@@ -197,14 +197,17 @@ def stages(cfg, coarse, final):
 
 # A fit's peak memory (reports/notes.md, 2026-11-27): a base that grows with the training pixels (the photos,
 # the ray bank: about 400 MiB and 30 bytes a pixel, fern 0.3 and garden 1.5 GiB before any grid) and a share per
-# stored vertex of the fitted fields at colour degree 0: the values, their Adam moments and gradient, the TV's
-# neighbour table and the step's temporaries Dr.Jit's allocator keeps, 296-310 bytes measured on fern, horns and
-# the statue (304^3 to 448^3; the TV adds into the gradient in place). The full phase is the peak: the background
-# refit after it holds the full field's values beside its own but steps the object's region alone (Adam's
-# ``subsets``), and each phase starts with Dr.Jit's allocation cache released. A few percent above the worst:
+# stored vertex of the fitted fields at colour degree 0: the values, their Adam moments and gradient and the three
+# arrays Adam's kernel writes beside them, the TV's neighbour table (24 bytes), and what Dr.Jit's allocator keeps
+# of the step's temporaries: 227-231 bytes measured on fern, horns and the statue (464^3 to 528^3, 12-13 M
+# vertices), 266 on garden (320^3, 9.8 M vertices, whose rays take the most samples). The state holds the values
+# Adam made (no stale copy), and the cache is released once the TV's table is built. The full phase is the peak:
+# the background refit after it holds the full field's values beside its own but steps the object's region alone
+# (Adam's ``subsets``), and each phase starts with Dr.Jit's allocation cache released. A few percent above the
+# worst:
 BASE_BYTES = 400 * 2 ** 20
 BYTES_PER_PIXEL = 30
-BYTES_PER_VERTEX = 320
+BYTES_PER_VERTEX = 272
 # Stored vertices per effective surface cell of the final grid, for the plan: fern 55-66 (416^3-528^3), horns
 # 81-87 (432^3-544^3), the removal family 55-195, the statue 150, garden 286 (reports/notes.md). The plan takes
 # about the lowest: every stage then counts its own vertices before it allocates them
