@@ -193,10 +193,11 @@ def with_sh_degree(state, degree):
     return FieldState(state.layout, data, channels, state.to_world, state.density_scale)
 
 
-def neighbour_vertices(state):
+def neighbour_vertices(state, evaluate=True):
     """For every stored vertex, the stored vertex index of its 6 axis neighbours (-x, +x, -y, +y, -z,
     +z) as UInt32 arrays; a vertex at the lattice border, of the empty brick or beyond the lattice is
-    its own neighbour there (Neumann). Neighbours in unallocated bricks are empty-brick vertices."""
+    its own neighbour there (Neumann). Neighbours in unallocated bricks are empty-brick vertices.
+    ``evaluate`` False: the tables as expressions, computed in whatever kernel reads them."""
     layout = state.layout
     coords, inside = layout.device_coords()
     own = dr.arange(mi.UInt32, state.vertices)
@@ -207,7 +208,8 @@ def neighbour_vertices(state):
             ok = inside & ((c[axis] > 0) if step < 0 else (c[axis] + 1 < layout.shape[axis]))
             c[axis] = dr.select(ok, c[axis] + step if step > 0 else c[axis] - 1, c[axis])
             nb = dr.select(ok, layout.address(*c, ok), own)
-            dr.eval(nb)
+            if evaluate:
+                dr.eval(nb)
             out.append(nb)
     return out
 

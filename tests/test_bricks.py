@@ -53,6 +53,9 @@ def test_device_coordinates_and_neighbours_match_the_lattice():
                         b = layout.brick
                         want = ((c[2] % b) * b + c[1] % b) * b + c[0] % b
                 assert nb[2 * axis + s][n] == want
+    lazy = field_state.neighbour_vertices(state, evaluate=False)  # the same tables, as expressions
+    for a, b in zip(lazy, nb):
+        np.testing.assert_array_equal(np.array(a), b)
 
 
 def test_resampling_to_a_finer_lattice_keeps_the_field():
