@@ -73,7 +73,7 @@ def test_bad_config_is_refused(tmp_path):
         FitConfig.from_sources(None, ["steps_full"])
     for item, message in (("batch_tile=0", "--set batch_tile=0: batch_tile must be a number >= 1, got 0"),
                           ("batch_rays=1.5", "batch_rays must be 'auto' or a whole number >= 1, got 1.5"),
-                          ("step_voxels=-1", "step_voxels must be a number > 0, got -1"),
+                          ("step_voxels=-1", "step_voxels must be 'auto' or a number > 0, got -1"),
                           ("lr_color=\"fast\"", "lr_color must be a number, got \"fast\"")):
         with pytest.raises(ValueError, match=re.escape(message)):
             FitConfig.from_sources(None, [item])

@@ -534,3 +534,67 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     state = SimpleNamespace(plan=dict(plan), schedule=[[0, 64], [500, r0]])
     cap_for_sh_degree(inputs(cfg.replace(resolution=r0)), state, 1)  # a resolution the user gave stays
     assert state.schedule == [[0, 64], [500, r0]]
+
+
+def test_a_step_of_more_voxels_costs_the_samples_share_less_on_the_finer_stages():
+    """step_factor: the samples' share SAMPLE_SHARE of a half-voxel step scales with 0.5 / step, the rest
+    (the vertices' work) does not; StepCost.marching applies it to the stages finer than the coarse one."""
+    from mi_voldis.fit.schedule import SAMPLE_SHARE, step_factor
+    assert step_factor(0.5) == 1.0
+    assert step_factor(1.0) == pytest.approx(1.0 - SAMPLE_SHARE / 2)
+    assert step_factor(0.25) == pytest.approx(1.0 + SAMPLE_SHARE)
+    base = StepCost(0.01, 64, host=0.002)
+    whole = base.marching(1.0)
+    assert whole.at(64) == base.at(64)  # the coarse stage marches half a voxel whatever the plan
+    assert whole.at([128, 512]) == pytest.approx(0.002 + (base.at([128, 512]) - 0.002) * step_factor(1.0))
+    assert StepCost.timed(0.01, 64).fine == 1.0
+
+
+def test_the_step_is_a_whole_voxel_where_memory_not_the_budget_bounds_the_grid(monkeypatch):
+    """step_voxels 'auto': costed at a whole voxel, a plan whose grid memory bounds keeps that grid and
+    buys more steps on it; one whose grid the budget's observations bound keeps half a voxel and the plan
+    it had (a cheaper step would only buy a finer grid, seen less); a number is the step of every stage."""
+    import mi_voldis.fit.train as train
+    from mi_voldis.fit.fields import step_voxels
+    from mi_voldis.fit.schedule import HALF_VOXEL, WHOLE_VOXEL, choose_step, plan_cost, resolution_bounds
+    survey = dict(SURVEY, surface_cells=200.0)  # a small surface: the 40,000 pixels are no bound below 848
+    monkeypatch.setattr(train, "capture_survey", lambda *a: survey)
+    cfg = FitConfig().for_backend("llvm").replace(min_steps=0)
+    samples = 0.01 * cfg.reference_msps * 1e6  # 0.01 s a coarse step at the reference speed
+    pixels = 4 * 100 * 100
+    tight = planned(cfg.replace(max_memory_gib=0.6), calibrated(0.01, samples))  # memory bounds the grid
+    loose = planned(cfg.replace(max_memory_gib=1e4), calibrated(0.01, samples))  # the budget does
+    budget = tight.plan["budget_seconds"] - cfg.calibration_steps * 0.01
+    half, whole = StepCost(0.01, 64), StepCost(0.01, 64).marching(WHOLE_VOXEL)
+    assert tight.plan["step_voxels"] == WHOLE_VOXEL and loose.plan["step_voxels"] == HALF_VOXEL
+    assert choose_step(cfg.replace(max_memory_gib=0.6), half, budget, survey, pixels) == WHOLE_VOXEL
+    # memory-bound: the grid the half-voxel plan would have picked, more steps on it
+    bounds = resolution_bounds(cfg.replace(max_memory_gib=0.6), half, budget, survey, pixels)
+    assert tight.plan["final_resolution"] == bounds["memory"] < bounds["observations"]
+    final = stages(cfg, 64, tight.plan["final_resolution"])
+    assert tight.steps_full == steps_for(final, whole, budget) > steps_for(final, half, budget)
+    assert plan_cost(tight.plan, 64).at(512) == pytest.approx(whole.at(512))
+    # budget-bound: the plan a half-voxel step had
+    assert loose.plan["final_resolution"] == affordable_resolution(cfg.replace(max_memory_gib=1e4), half, budget,
+                                                                   survey, pixels)
+    assert loose.steps_full == steps_for(stages(cfg, 64, loose.plan["final_resolution"]), half, budget)
+    # the step of each stage: half a voxel on the coarse one, the plan's after it; a number everywhere
+    from types import SimpleNamespace
+    lattice = {r: SimpleNamespace(fields={"full": SimpleNamespace(shape=(r, r, r))}, plan=tight.plan)
+               for r in (64, 128)}
+    assert [step_voxels(cfg, lattice[r]) for r in (64, 128)] == [HALF_VOXEL, WHOLE_VOXEL]
+    assert [step_voxels(cfg.replace(step_voxels=0.7), lattice[r]) for r in (64, 128)] == [0.7, 0.7]
+    explicit = planned(cfg.replace(max_memory_gib=0.6, step_voxels=0.5), calibrated(0.01, samples))
+    assert "step_voxels" not in explicit.plan and explicit.steps_full == steps_for(final, half, budget)
+    # a wall-clock budget, timed on the coarse stage's half-voxel steps: the steps ahead cost the plan's step
+    from mi_voldis.fit.train import replan
+    wall = planned(cfg.replace(max_memory_gib=0.6, minutes=1.5), calibrated(0.01, samples))
+    assert wall.plan["step_voxels"] == WHOLE_VOXEL
+    second = wall.schedule[1][0]
+    wall.log += [{"step": s, "step_seconds": 0.01, "time": 2.0 + 0.01 * (s - 200), "samples": samples}
+                 for s in range(201, second + 1)]
+    left = wall.plan["budget_seconds"] - wall.log[-1]["time"]
+    marched = rescale(wall.schedule, wall.steps_full, second, StepCost.timed(0.01, 64).marching(WHOLE_VOXEL), left)
+    assert rescale(wall.schedule, wall.steps_full, second, StepCost.timed(0.01, 64), left)[1] < marched[1]
+    replan(wall, second)
+    assert (wall.schedule, wall.steps_full) == marched

@@ -20,6 +20,7 @@ from ..field_state import (
 )
 from ..metrics import dilate
 from ..render import march
+from .fields import step_voxels
 from .hull import hull_behind_occluders, visual_hull
 from .visibility import hidden_depth, hidden_surface_side, in_view
 
@@ -56,25 +57,27 @@ def start_cleared(inputs, state):
     depth = training_depths(inputs, state)
     carved = object_ray_keys(inputs, full, [v for v in depth if v in set(inputs.ds.masked_train)], depth)
     hull, state.hull_points = hull_region(inputs, full, neighbour_vertices(full))
-    state.fields["bg"] = emptied(inputs, full, never_seen(inputs, full, hull > 0, depth) | keys_mask(full, carved))
+    region = never_seen(inputs, full, hull > 0, depth) | keys_mask(full, carved)
+    state.fields["bg"] = emptied(inputs, state, full, region)
     return carved
 
 
 SOLID_ALPHA = 0.5  # opacity per sample step of the hidden surface's vertices as the background starts
 
 
-def emptied(inputs, field, region):
+def emptied(inputs, state, field, region):
     """``field`` with the vertices of ``region`` (Bool per stored vertex) empty: the initial density of
     an unfitted field. Their colour stays: colour is interpolated before its activation, so a black
     vertex beside a surface would darken it; where a whole neighbourhood is empty the colour is cleared
     at the end of the fit (:func:`clear_empty_background_color`)."""
-    return with_opacity(inputs, field, region, inputs.cfg.density_init_alpha)
+    return with_opacity(inputs, state, field, region, inputs.cfg.density_init_alpha)
 
 
-def with_opacity(inputs, field, region, alpha):
+def with_opacity(inputs, state, field, region, alpha):
     """``field`` with the density of the vertices of ``region`` (Bool per stored vertex) that of opacity
-    ``alpha`` per sample step, their colour as it was."""
-    raw = density_raw_for_alpha(alpha, voxel_of(field) * inputs.cfg.step_voxels, field.density_scale)
+    ``alpha`` per sample step of the fit (``state``'s, :func:`~mi_voldis.fit.fields.step_voxels`), their
+    colour as it was."""
+    raw = density_raw_for_alpha(alpha, voxel_of(field) * step_voxels(inputs.cfg, state), field.density_scale)
     channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
     values = dr.select(dr.repeat(region, field.width) & (channel == 0), raw, field.data)
     return FieldState(field.layout, values, field.channels, field.to_world.copy(), field.density_scale)
@@ -152,9 +155,9 @@ def start_harmonic(inputs, state, depths=None):
                            neighbours)
     # the object itself: empty, its colour the fill's (:func:`emptied`)
     filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
-    state.fields["bg"] = emptied(inputs, filled, obj)
+    state.fields["bg"] = emptied(inputs, state, filled, obj)
     if solid is not None:  # the hidden surface: opaque from the filled depth on (hole_shell)
-        state.fields["bg"] = with_opacity(inputs, state.fields["bg"], solid & ~obj, SOLID_ALPHA)
+        state.fields["bg"] = with_opacity(inputs, state, state.fields["bg"], solid & ~obj, SOLID_ALPHA)
     state.hull_points = points
     return hull, obj, refill
 

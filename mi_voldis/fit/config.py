@@ -127,7 +127,11 @@ class FitConfig(Settings):
                                             "backend's, 8192 on llvm, 32768 on cuda)", check=_auto_or(True, low=1))
     batch_tile: int = setting(1, "> 1: rays in tile x tile pixel tiles (coherent: faster marches, worse "
                                  "fits per second)", low=1)
-    step_voxels: float = setting(0.5, "sample spacing along a ray, in voxels of the current grid", above=0)
+    step_voxels: float | str = setting("auto", "sample spacing along a ray, in voxels of the current grid ('auto': "
+                                               "half a voxel, and a whole one after the coarse stage where the "
+                                               "default plan's grid is bound by memory or pixels, not by the "
+                                               "observations the budget buys; metrics.json: schedule.plan."
+                                               "step_voxels)", check=_auto_or(False, above=0))
     max_samples: int = setting(512, "cap on samples per ray", low=1)
 
     # ---- optimiser: Adam on raw grid values, exponential decay to lr * lr_final_ratio

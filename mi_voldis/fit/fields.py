@@ -17,7 +17,7 @@ from ..scene import build_integrator, integrator_properties
 from ..space import SceneBox, SceneSpace
 from ..transforms import apply_point
 from .config import FitConfig
-from .schedule import affordable_vertices, coarse_resolution, finest_resolution
+from .schedule import HALF_VOXEL, affordable_vertices, coarse_resolution, finest_resolution
 
 # the share of traced rays cut short by the march's sample cap at which a fit refines no further (sample_bound)
 SAMPLE_CUT_SHARE = 0.01
@@ -53,7 +53,7 @@ def init_fields(inputs, state, roles, sh_degree):
     (:func:`~mi_voldis.fit.schedule.finest_resolution`)."""
     cfg = inputs.cfg
     res = coarse_resolution(cfg)
-    step = cell_size(state.lo, state.hi, res) * cfg.step_voxels
+    step = cell_size(state.lo, state.hi, res) * step_voxels(cfg, state)
     scale = 1.0 / cell_size(state.lo, state.hi, finest_resolution(cfg))
     raw = density_raw_for_alpha(cfg.density_init_alpha, step, scale)
     for r in roles:
@@ -190,9 +190,19 @@ def occupancy_resolution(cfg, state):
     return max(1, int(np.ceil((max(state.fields["full"].shape) - 1) / cfg.occupancy_voxels)))
 
 
+def step_voxels(cfg, state):
+    """Sample spacing along rays in voxels of the current grid: ``step_voxels`` where it is a number; for
+    'auto', half a voxel on the coarse stage and what the plan chose for the stages after it
+    (:func:`~mi_voldis.fit.schedule.choose_step`; half a voxel where no plan chose)."""
+    if cfg.step_voxels != "auto":
+        return float(cfg.step_voxels)
+    fine = "full" in state.fields and max(state.fields["full"].shape) > coarse_resolution(cfg)
+    return float((state.plan or {}).get("step_voxels", HALF_VOXEL)) if fine else HALF_VOXEL
+
+
 def sample_step(cfg, state):
-    """Sample spacing along rays (scene units): ``step_voxels`` of the current grid's voxels."""
-    return cfg.step_voxels * voxel_size(state.fields["full"])
+    """Sample spacing along rays (scene units): :func:`step_voxels` of the current grid's voxels."""
+    return step_voxels(cfg, state) * voxel_size(state.fields["full"])
 
 
 def scene_properties(inputs, state, **options):

@@ -11,8 +11,13 @@ derived from the capture and the time budget once the first, coarse stage has ru
   than a coarser one seen often. Observations, not passes over the pixels, are the currency: a capture
   with more views never gets a coarser grid than the same scene with fewer;
 * ``stages`` resolutions double up to it, each starting at its ``stage_starts`` fraction of the steps;
+* the stages after the coarse one sample every whole voxel where, so costed, the final grid is still
+  bound by the memory or the pixels rather than by the observations the budget buys (``step_voxels``
+  'auto', :func:`choose_step`): the cheaper step then buys more steps on that grid and halves the
+  samples a fitted ray evaluates; elsewhere every half voxel;
 * the number of steps (``steps_full``, or from ``minutes``) fills the budget, a step at resolution R_k
-  costing host + kernels (R_k / R_1)^COST_EXPONENT (:class:`StepCost`; measured: the kernels cost a
+  costing host + kernels (R_k / R_1)^COST_EXPONENT, times :func:`step_factor` at a whole-voxel step
+  (:class:`StepCost`; measured: the kernels cost a
   step's samples, proportional to R, and its vertices, to R^2 on surfaces; the host's part is fixed
   per step, nothing on a CPU, most of a step on a GPU), with the kernels' seconds timed or costed in
   the coarse stage, leaving
@@ -73,21 +78,47 @@ BACKENDS = {
 }
 
 
+# The sample spacing of a fit's stages after the coarse one (``step_voxels`` 'auto', :func:`choose_step`): half a
+# voxel, or a whole one where the cheaper step buys steps on the grid memory bounds rather than a finer grid. The
+# coarse stage marches at half a voxel: it is timed or costed for the plan, and its grid is coarse anyway.
+HALF_VOXEL, WHOLE_VOXEL = 0.5, 1.0
+# The share of a training step's kernels that marches the samples at the final stages, at half a voxel: the
+# rest goes over the stored vertices (gradients, Adam, TV) and does not shrink with the step. The statue's
+# explicit plan at 464^3 run at half and one voxel: 0.162 and 0.115 s a step (a share of 0.59); fern's default
+# plan at 528^3: 0.75 of the seconds at one voxel (0.5; reports/notes.md, "A whole-voxel step where memory
+# bounds the grid"). The lower share: a plan that overestimates a step ends early rather than late.
+SAMPLE_SHARE = 0.5
+
+
+def step_factor(step_voxels):
+    """A training step's kernels at ``step_voxels`` over theirs at half a voxel: the samples' share
+    SAMPLE_SHARE scales with the number of samples, 0.5 / step_voxels, the vertices' share does not."""
+    return (1.0 - SAMPLE_SHARE) + SAMPLE_SHARE * HALF_VOXEL / float(step_voxels)
+
+
 @dataclass(frozen=True)
 class StepCost:
     """Seconds of a training step at resolution R:
 
-        host + kernels (R / resolution)^COST_EXPONENT
+        host + kernels (R / resolution)^COST_EXPONENT f,   f = ``fine`` where R > resolution, else 1
 
     ``kernels``: the seconds of a step's kernels at ``resolution`` (they grow with its samples and
     vertices); ``host``: what a step costs whatever its size (tracing, launches, the loss read back), the
-    whole step on a GPU at small batches and nothing on a CPU."""
+    whole step on a GPU at small batches and nothing on a CPU; ``fine``: the kernels' factor at the finer
+    stages where they march another step than the stage timed or costed (:func:`step_factor`)."""
     kernels: float
     resolution: int
     host: float = 0.0
+    fine: float = 1.0
 
     def at(self, resolution):
-        return self.host + self.kernels * (np.asarray(resolution, np.float64) / self.resolution) ** COST_EXPONENT
+        r = np.asarray(resolution, np.float64)
+        factor = np.where(r > self.resolution, self.fine, 1.0)
+        return self.host + self.kernels * (r / self.resolution) ** COST_EXPONENT * factor
+
+    def marching(self, step_voxels):
+        """This cost (at half a voxel) with the finer stages marching ``step_voxels``."""
+        return StepCost(self.kernels, self.resolution, self.host, step_factor(step_voxels))
 
     @classmethod
     def timed(cls, seconds, resolution, host=0.0):
@@ -285,6 +316,21 @@ def affordable_resolution(cfg, cost, budget_seconds, survey, pixels):
     return min(resolution_bounds(cfg, cost, budget_seconds, survey, pixels).values())
 
 
+def choose_step(cfg, cost, budget_seconds, survey, pixels):
+    """The sample spacing (voxels) of the stages after the coarse one for ``step_voxels`` 'auto':
+    WHOLE_VOXEL where, costed at it (``cost``: at half a voxel, :meth:`StepCost.marching`), the finest
+    resolution is still bound by the memory or the training pixels, not by the observations the budget
+    buys: a cheaper step then buys more steps on the same grid (fern, horns: the same or better on half
+    the samples, reports/notes.md). HALF_VOXEL where the observations bound it: there a cheaper step
+    only buys a finer grid that each ray sees less of (the removal family's small scenes lost so). Where a
+    rule ties with the observations, the cheaper step: the grid is then the same. Decided on the plan's
+    memory estimate, not on a later cap: garden, planned at half a voxel and capped far below its plan,
+    lost on 22 of 24 held-out views at a whole voxel from the cap (reports/notes.md)."""
+    bounds = resolution_bounds(cfg, cost.marching(WHOLE_VOXEL), budget_seconds, survey, pixels)
+    others = min(bounds["pixels"], bounds["memory"])
+    return WHOLE_VOXEL if bounds["observations"] >= others else HALF_VOXEL
+
+
 def steps_for(plan_stages, cost, budget_seconds):
     """Steps whose cost fills ``budget_seconds``, a step at resolution R costing ``cost.at(R)``
     (:class:`StepCost`)."""
@@ -351,9 +397,10 @@ def rescale_after_cap(schedule, steps_full, step, cap, cost, budget):
 
 def plan_cost(plan, coarse):
     """The :class:`StepCost` a default plan (costed at the reference speed: ``plan`` holds
-    ``coarse_step_seconds`` and ``host_ms``) was made with, its coarse stage at ``coarse``."""
+    ``coarse_step_seconds``, ``host_ms`` and the finer stages' ``step_voxels``, half a voxel in plans
+    made before it was recorded) was made with, its coarse stage at ``coarse``."""
     host = plan.get("host_ms", 0.0) / 1e3
-    return StepCost(plan["coarse_step_seconds"] - host, coarse, host)
+    return StepCost(plan["coarse_step_seconds"] - host, coarse, host).marching(plan.get("step_voxels", HALF_VOXEL))
 
 
 def capped(schedule, cap, step=0):

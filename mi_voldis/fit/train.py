@@ -74,6 +74,7 @@ from .schedule import (
     backend,
     capped,
     capture_survey,
+    choose_step,
     coarse_resolution,
     memory_resolution,
     rescale,
@@ -296,6 +297,8 @@ def replan(state, step):
     if len(rows) < 10:
         return
     cost = StepCost.timed(float(np.median(rows)), state.schedule[timed][1], plan.get("host_ms", 0.0) / 1e3)
+    if timed == 0 and "step_voxels" in plan:  # timed at the coarse stage's half-voxel step, the finer stages
+        cost = cost.marching(plan["step_voxels"])  # march the plan's
     state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, cost,
                                                budget - state.log[-1]["time"])
     state.plan.setdefault("rescaled", []).append([step, state.steps_full])
@@ -331,6 +334,9 @@ def plan_schedule(inputs, state, integrator):
         state.plan.update(minutes=float(minutes), coarse_step_seconds=float(cost.at(coarse)), host_ms=cfg.host_ms,
                           budget_seconds=minutes * 60.0 * full_share)
         if survey is not None and survey["surface_cells"]:
+            if cfg.step_voxels == "auto":
+                state.plan["step_voxels"] = choose_step(cfg, cost, budget, survey, inputs.bank.pixels)
+                cost = cost.marching(state.plan["step_voxels"])
             bounds = resolution_bounds(cfg, cost, budget, survey, inputs.bank.pixels)
             state.plan.update(resolution_bounds=bounds, affordable_resolution=min(bounds.values()))
             final = min(final, state.plan["affordable_resolution"])
@@ -357,10 +363,12 @@ def describe_plan(state):
     if "minutes" in plan:
         clock = "at the reference speed" if "reference_msps" in plan else "of this machine's wall clock"
         line += f" ({plan['minutes']:.1f} min {clock})"
+    if "step_voxels" in plan:
+        line += f", samples every {plan['step_voxels']:g} voxel after the coarse stage"
     line += f"; the capture asks {plan['capture_resolution']}"
     if plan.get("affordable_resolution", plan["capture_resolution"]) < plan["capture_resolution"]:
         bounds = plan.get("resolution_bounds", {"observations": plan["affordable_resolution"]})
-        bound = min(bounds, key=bounds.get)
+        bound = min(bounds, key=lambda k: (bounds[k], k == "observations"))  # a tie: the rule a cheaper step keeps
         line += f", {BOUND_NAMES[bound]} {plan['affordable_resolution']}"
     return line
 
