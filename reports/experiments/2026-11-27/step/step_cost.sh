@@ -8,6 +8,7 @@
 #       '[[0,64],[300,128],[600,232],[1000,464]]' 1500
 set -e
 DS=$1; OUT=$2; SCHED=$3; N=$4
+if [ -e "$OUT" ]; then echo "$OUT: exists, not overwritten" >&2; exit 1; fi
 mkdir -p "$OUT"
 for s in 0.5 1.0; do
   python scripts/train.py "$DS" --out "$OUT/step_$s" --set "resolution_schedule=$SCHED" --set steps_full="$N" \
