@@ -105,6 +105,41 @@ def test_the_family_section_offers_the_family_and_refuses_other_scenes():
         section_scenes("family", ["random0"])
 
 
+def test_a_family_trial_fits_every_scene_with_its_settings_and_its_report_names_them(tmp_path, monkeypatch):
+    """``bench.py --family --set NAME=VALUE``: every scene's fit gets the overrides (so a finished fit of
+    the default is not reused for it), and the report says it is a trial, not the defaults."""
+    from mi_voldis.bench import family, run
+    fitted = {}
+    monkeypatch.setattr(run, "make_data", lambda scene, out, logs, quick: out)
+    monkeypatch.setattr(run, "fit", lambda data, out, sets, logs, keep=False: fitted.setdefault(out, sets) and {})
+    monkeypatch.setattr(family, "strategy_rows", lambda *args: {})
+    results = family.run_family(str(tmp_path / "work"), str(tmp_path / "report"), ["family00", "family10"],
+                                sets=["tv_density=0.002"])
+    assert sorted(os.path.basename(out) for out in fitted) == ["family00_0", "family10_0"]
+    assert all(sets == ["tv_density=0.002"] for sets in fitted.values())
+    assert results["sets"] == ["tv_density=0.002"]
+    trial = family_results({"family10": ("check", 2.0)})
+    assert "the default command; " in "\n".join(family.lead(trial))
+    trial["sets"] = ["tv_density=0.002", "tv_color=0.0002"]
+    assert ("the default command `--set tv_density=0.002` `--set tv_color=0.0002` (a trial: not the defaults)"
+            in "\n".join(family.lead(trial)))
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--removal", "--set", "tv_density=0.002", "--report", "R"], "--set is for --family"),
+    (["--family", "--set", "tv_density=0.002"], "give --report DIR"),
+    (["--family", "--set", "tv_densty=0.002", "--report", "R"], "tv_densty"),
+    (["--family", "--set", "tv_density=-1", "--report", "R"], "tv_density"),
+])
+def test_a_family_trial_refuses_bad_settings_and_the_defaults_report_before_anything_runs(argv, message, capsys,
+                                                                                          tmp_path):
+    from voldis_cli.bench import main
+    with pytest.raises(SystemExit) as e:
+        main(argv + ["--work", str(tmp_path / "work")])
+    assert e.value.code == 2 and message in capsys.readouterr().err
+    assert not os.path.exists(tmp_path / "work") and not os.path.exists("R")
+
+
 def test_the_removal_report_leads_with_the_family_and_stands_alone_without_the_removal_section(tmp_path):
     import json
 

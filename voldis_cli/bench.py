@@ -56,11 +56,24 @@ def main(argv=None):
                     help="only SPIn-NeRF's protocol on family scenes in its layout (default: the check half)")
     ap.add_argument("--lpips-weights", metavar="DIR",
                     help="--spinnerf: folder with LPIPS weights (see mi_voldis/lpips.py; nothing is downloaded)")
+    ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", dest="sets",
+                    help="--family: fit every scene with this setting too (a trial of a default, against the "
+                         "default's report); needs its own --report")
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--quiet", action="store_true", help="print nothing but errors (the children run quietly anyway)")
     args = ap.parse_args(argv)
     if args.lpips_weights and not args.spinnerf:
         ap.error("--lpips-weights is for --spinnerf")
+    if args.sets:
+        if not args.family:
+            ap.error("--set is for --family (a trial of a default on the removal family)")
+        if os.path.normpath(args.report) == os.path.normpath(ap.get_default("report")):
+            ap.error("--set: a trial's report goes in its own folder (give --report DIR), not over the default's")
+        from mi_voldis.fit.config import FitConfig
+        try:
+            FitConfig.from_sources(None, args.sets)
+        except ValueError as e:
+            ap.error(str(e))
     os.environ["MI_VOLDIS_VARIANT"] = args.variant
     if args.step_profile:
         import json
@@ -99,9 +112,11 @@ def main(argv=None):
                                    "family": (run_family, write_family),
                                    "spinnerf": spinnerf_section(args.lpips_weights)}.items():
         if getattr(args, flag):  # one section alone, with its own report
-            results = measure(os.path.abspath(args.work), args.report, scenes)
+            trial = {"sets": args.sets} if args.sets else {}  # only --family takes settings (checked above)
+            results = measure(os.path.abspath(args.work), args.report, scenes, **trial)
             path = write(results, args.report, f"python scripts/bench.py --{flag}" +
-                         (f" --scenes {args.scenes}" if args.scenes else ""))
+                         (f" --scenes {args.scenes}" if args.scenes else "") +
+                         "".join(f" --set {s}" for s in args.sets))
             if not args.quiet:
                 print(path)
             return

@@ -27,10 +27,12 @@ def scenes(chosen=None):
     return [family.name(k) for k in family.TUNING + family.CHECK if not chosen or family.name(k) in chosen]
 
 
-def run_family(work, report_dir, chosen=None):
-    """Fit and score the family (``chosen``: some of its scenes); results in ``report_dir``/family.json."""
+def run_family(work, report_dir, chosen=None, sets=()):
+    """Fit and score the family (``chosen``: some of its scenes; ``sets``: ``--set`` overrides of every
+    fit, a trial of a default); results in ``report_dir``/family.json."""
     results = new_results()
-    for scene, _, run, logs in ground_truth_fits(work, chosen, results, among=scenes()):
+    results["sets"] = list(sets)
+    for scene, _, run, logs in ground_truth_fits(work, chosen, results, among=scenes(), sets=sets):
         k = family.index(scene)
         seed, kind = family.scene(k)
         results["scenes"][scene] = {"fit": run, "half": family.half(k), "seed": seed, "kind": kind,
@@ -93,7 +95,9 @@ def lead(results, sheets=None):
           "(`mi_voldis/synth/family.py`, `make_dataset.py --family K`): hand-held arcs and forward rigs with uneven "
           "spacing beside orbits and forward grids (forward-facing as often as not), glossy and patterned floors, "
           "walls close behind the object, occluders, area lights; the first ten tune, the last ten check (fixed "
-          "in the code before any result). Each is fitted with the default command; the background is refitted "
+          "in the code before any result). Each is fitted with the default command"
+          + "".join(f" `--set {s}`" for s in results.get("sets", []))
+          + (" (a trial: not the defaults)" if results.get("sets") else "") + "; the background is refitted "
           "with each row from that full field (`mi_voldis/bench/strategies.py`). Margin: in-mask PSNR of the "
           "background layer (held-out views, masks dilated by 3% of the diagonal) minus the better of OpenCV "
           "Telea / Navier-Stokes on the same view (target +2 dB); consistency margin: over the best 2D "

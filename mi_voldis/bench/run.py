@@ -209,16 +209,16 @@ STRATEGIES = ["lift", "clear", "harmonic", "guided", "guided+shadow_contrast=0",
               "guided+keep_seen_gap=0", "guided+keep_seen_gap=4"]
 
 
-def ground_truth_fits(work, scenes, results, among=None):
+def ground_truth_fits(work, scenes, results, among=None, sets=()):
     """(scene, dataset, default fit kept with its checkpoint, logs folder) of every ground-truth scene
-    of ``among`` (default: bundled and random; ``scenes`` picks some), made when missing;
-    ``results['seconds']`` is set when the loop ends."""
+    of ``among`` (default: bundled and random; ``scenes`` picks some), made when missing; ``sets``:
+    ``--set`` overrides of the fits (a trial of a default); ``results['seconds']`` is set when the loop ends."""
     logs = os.path.join(work, "logs")
     os.makedirs(logs, exist_ok=True)
     t0 = time.perf_counter()
     for scene in [s for s in among or TRUTH_SCENES if not scenes or s in scenes]:
         data = make_data(scene, os.path.join(work, "data", scene), logs, False)
-        yield scene, data, fit(data, os.path.join(work, "runs", f"{scene}_0"), [], logs, keep=True), logs
+        yield scene, data, fit(data, os.path.join(work, "runs", f"{scene}_0"), list(sets), logs, keep=True), logs
     results["seconds"] = time.perf_counter() - t0
 
 
