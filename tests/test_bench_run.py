@@ -127,17 +127,35 @@ def test_a_family_trial_fits_every_scene_with_its_settings_and_its_report_names_
 
 @pytest.mark.parametrize("argv, message", [
     (["--removal", "--set", "tv_density=0.002", "--report", "R"], "--set is for --family"),
-    (["--family", "--set", "tv_density=0.002"], "give --report DIR"),
+    (["--family", "--set", "tv_density=0.002", "--report", os.path.abspath("reports")], "give --report DIR"),
+    (["--family", "--set", "tv_density=0.002", "--report", "R", "--work", "out/bench/"], "give --work DIR"),
     (["--family", "--set", "tv_densty=0.002", "--report", "R"], "tv_densty"),
     (["--family", "--set", "tv_density=-1", "--report", "R"], "tv_density"),
 ])
-def test_a_family_trial_refuses_bad_settings_and_the_defaults_report_before_anything_runs(argv, message, capsys,
-                                                                                          tmp_path):
+def test_a_family_trial_refuses_bad_settings_and_the_defaults_folders_before_anything_runs(argv, message, capsys,
+                                                                                           tmp_path):
     from voldis_cli.bench import main
     with pytest.raises(SystemExit) as e:
-        main(argv + ["--work", str(tmp_path / "work")])
+        main(["--work", str(tmp_path / "work")] + argv)
     assert e.value.code == 2 and message in capsys.readouterr().err
     assert not os.path.exists(tmp_path / "work") and not os.path.exists("R")
+
+
+def test_a_family_trial_refuses_a_report_folder_that_holds_the_defaults_report(capsys, tmp_path):
+    """A copy of the default's report elsewhere is not written over by a trial; a trial's own is."""
+    import json
+
+    from voldis_cli.bench import main
+    report = tmp_path / "report"
+    report.mkdir()
+    (report / "family.json").write_text(json.dumps(family_results({"family10": ("check", 2.0)})))
+    before = (report / "family.json").read_text()
+    argv = ["--family", "--set", "tv_density=0.002", "--report", str(report), "--work", str(tmp_path / "work"),
+            "--scenes", "family10"]
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 2 and "is the default's report" in capsys.readouterr().err
+    assert (report / "family.json").read_text() == before and not os.path.exists(tmp_path / "work")
 
 
 def test_the_removal_report_leads_with_the_family_and_stands_alone_without_the_removal_section(tmp_path):

@@ -67,8 +67,14 @@ def main(argv=None):
     if args.sets:
         if not args.family:
             ap.error("--set is for --family (a trial of a default on the removal family)")
-        if os.path.normpath(args.report) == os.path.normpath(ap.get_default("report")):
-            ap.error("--set: a trial's report goes in its own folder (give --report DIR), not over the default's")
+        for flag in ("report", "work"):  # a trial never writes over the default's report or refits its runs
+            if os.path.realpath(getattr(args, flag)) == os.path.realpath(ap.get_default(flag)):
+                ap.error(f"--set: a trial goes in its own folders (give --{flag} DIR), not the default's")
+        from mi_voldis.bench.family import load
+        earlier = load(args.report)
+        if earlier is not None and not earlier.get("sets"):
+            ap.error(f"--set: {os.path.join(args.report, 'family.json')} is the default's report (no settings): "
+                     "give the trial another --report")
         from mi_voldis.fit.config import FitConfig
         try:
             FitConfig.from_sources(None, args.sets)

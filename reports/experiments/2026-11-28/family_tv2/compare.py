@@ -41,6 +41,8 @@ def main(work, base_path="reports/family.json"):
               f"{old['consistency_margin']:+.2f} -> {new['consistency_margin']:+.2f} | IoU "
               f"{old['coverage_iou']:.2f} -> {new['coverage_iou']:.2f} | haze {old['haze_mask']:.3f}/"
               f"{old['haze_outside']:.3f} -> {new['haze_mask']:.3f}/{new['haze_outside']:.3f}")
+    if not any(deltas.values()):
+        sys.exit(f"{work}: no family scene with a finished fit and `guided` row (runs/SCENE_0, removal/SCENE/guided)")
     for half, d in deltas.items():
         if d:
             (s0, m0), (s1, m1) = worst[half]
