@@ -7,6 +7,7 @@ import mitsuba as mi
 import numpy as np
 
 from .. import exposure
+from ..data.scene_box import rig_distance
 from ..device import from_numpy
 from ..field_state import neighbour_vertices
 from ..losses import background_loss, distortion_loss, full_loss
@@ -45,6 +46,9 @@ class FieldFit:
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
         self.density_hull = density_hull
         self.view_rates = view_rates and inputs.cfg.lr_views > 0
+        # near-camera gradient scaling: r in world units (mi_voldis.render.march)
+        train = [inputs.ds.cameras[v] for v in inputs.ds.train]
+        self.near_grad = inputs.cfg.near_grad * rig_distance(train, inputs.ds.near_far) if inputs.cfg.near_grad else 0.0
         self.prior = prior  # (RayBank, pool): the guided background's 2D colour prior (mi_voldis.fit.guide)
         self.fit_exposure = fit_exposure and state.exposure is not None
         self.adam = state.adam if adam is None else adam
@@ -170,7 +174,7 @@ class FieldFit:
         o, d, color, mask, view = self.bank.batch(rng, n, self.pool, cfg.batch_tile)
         distortion = tuple(layer for layer in self.layers if layer in ("full", "bg")) if cfg.distortion else ()
         out = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(n, np.float32)), self.layers,
-                          distortion=distortion)
+                          distortion=distortion, near_grad=self.near_grad)
         behind = backdrop(self.inputs.ds, rng, n)
         loss = mi.Float(0.0)
         stats = {"samples": float(dr.sum(out["evaluated"])[0])}
@@ -196,7 +200,8 @@ class FieldFit:
             bank, pool = self.prior
             m = max(1, int(cfg.prior_rays * n))
             o, d, target, _, prior_view = bank.batch(rng, m, pool, cfg.batch_tile)
-            prior = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(m, np.float32)), ("bg",))
+            prior = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(m, np.float32)), ("bg",),
+                                near_grad=self.near_grad)
             err = full_loss(photo(prior["bg"], backdrop(self.inputs.ds, rng, m), prior_view), target)
             loss += cfg.prior_weight * err
             stats["psnr_prior"] = psnr_of(err)

@@ -218,11 +218,12 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         return layer_io.EXR_LAYERS + (("res",) if "residual" in self.fields else ())
 
     # ---------------------------------------------------------------------------- planning
-    def plan(self, layers=None, samples=None, distortion=()):
-        """The :class:`march.Plan` computing ``layers`` (default: all) with ``samples`` per ray, and the
-        distortion loss of the ``distortion`` layers."""
+    def plan(self, layers=None, samples=None, distortion=(), near_grad=0.0):
+        """The :class:`march.Plan` computing ``layers`` (default: all) with ``samples`` per ray, the
+        distortion loss of the ``distortion`` layers, and with ``near_grad`` > 0 gradients scaled near
+        the cameras (:mod:`mi_voldis.render.march`)."""
         layers = tuple(layers or (MODES + (("res",) if "residual" in self.fields else ())))
-        key = (layers, samples or self.samples, tuple(distortion))
+        key = (layers, samples or self.samples, tuple(distortion), float(near_grad))
         if key not in self._plans:
             lookups, sources = self._lookups()
             needed = mixing.needed_sources(self.composition, sources, layers)
@@ -231,7 +232,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             skip = self.skip_length()
             self._plans[key] = march.Plan(tuple(lk for lk in lookups if lk.key in needed), sources,
                                           self.composition, layers, key[1], boxes, self.space, self.occupancy,
-                                          self.step_size, skip, key[2], self.near)
+                                          self.step_size, skip, key[2], self.near, key[3])
         return self._plans[key]
 
     def skip_length(self):

@@ -41,6 +41,13 @@ interval lengths delta_i),
 is accumulated by the primal in one pass. Its gradient is that of sum_i w_i a_i with the a_i held
 fixed, a_i = dL/dw_i = 2 (2 s_i W_<i - 2 S_<i + S - s_i W) + 2/3 w_i delta_i (W, S: the totals), so the
 replay treats it as one more term with colour a_i, and sum_i w_i a_i = 2 L_dist starts its rho.
+
+Near-camera gradient scaling (Philip and Deschaintre, "Floaters No More", 2023), a plan's ``near_grad``
+r > 0: the replay multiplies sample i's back-propagated term by min(1, (d_i / r)^2), d_i the world
+distance from the ray's origin. A point near a camera covers many of its pixels, so one view's gradient
+there outweighs the few other views that see it from afar; the factor evens out that density of
+gradients, and the floaters a view grows just in front of itself, which the other views cannot undo,
+no longer form. The primal, and so the loss, is unchanged; every term's gradient is scaled alike.
 """
 from dataclasses import dataclass
 
@@ -97,6 +104,7 @@ class Plan:
     skip: float = 0.0  # contracted space: the step across empty occupancy cells (scene units)
     distortion: tuple = ()  # layers ("full", "bg") whose chain's distortion loss the march computes
     near: float = 0.0  # world distance from the ray origin where sampling starts
+    near_grad: float = 0.0  # > 0: the adjoint scales sample gradients by min(1, (d / near_grad)^2) (docstring)
 
     def __post_init__(self):
         # Chains and terms depend only on the rule and layers: find them once with placeholder values.
@@ -351,7 +359,8 @@ def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, 
                 if probe is not None:
                     probe(p, w, evaluate, depth)
             else:
-                carry = _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc)
+                scale = None if not plan.near_grad else near_scale(t, plan.near_grad)
+                carry = _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc, scale)
         depth = {c: depth[c] + dr.detach(x[c]) for c in plan.chains}
         i, k = i + 1, k + dr.select(evaluate, 1, 0)
         return i, k, b, active & path.more(i, k, b) & _transparent(depth), depth, carry
@@ -391,10 +400,17 @@ def _accumulate(plan, carry, terms, w, t, occupied, fg_chains, s, delta):
     return acc, stats
 
 
-def _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc):
+def near_scale(distance, near_grad):
+    """The near-camera factor min(1, (d / near_grad)^2) of a sample at world distance ``d`` (module
+    docstring)."""
+    return dr.minimum(1.0, dr.square(distance * (1.0 / near_grad)))
+
+
+def _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc, scale=None):
     """Adjoint step: back-propagate <dL, w_i g_i> - rho x_i of every chain through sample i's lookups
     (its gradient is dL/dg_i and dL/dx_i of the module docstring; the distortion loss a term with
-    colour a_i) and move rho and the distortion's running sums past sample i."""
+    colour a_i), times ``scale`` (the near-camera factor, None: 1), and move rho and the distortion's
+    running sums past sample i."""
     rho, running = dict(carry[0]), dict(carry[1])
     value = {c: mi.Float(0.0) for c in plan.chains}
     for (chain, layer), (g, k) in terms.items():
@@ -411,6 +427,8 @@ def _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc):
     for c in plan.chains:
         rho[c] = rho[c] - dr.detach(value[c])
         objective += value[c] - rho[c] * x[c]
+    if scale is not None:
+        objective = objective * dr.detach(scale)
     # AllowNoGrad: a tracked field may receive nothing (its layers absent from the loss)
     dr.backward_from(dr.select(active & dr.isfinite(objective), objective, 0.0),
                      flags=dr.ADFlag.Default | dr.ADFlag.AllowNoGrad)

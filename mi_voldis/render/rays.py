@@ -39,7 +39,8 @@ class _RenderRays(dr.CustomOp):
         return "voldis.render_rays"
 
 
-def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=0.0, t_max=dr.inf, distortion=()):
+def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=0.0, t_max=dr.inf, distortion=(),
+                near_grad=0.0):
     """Layers of the scene along rays ``o + t d`` (world space, ``d`` unit length).
 
     ``u``: per-ray jitter in [0, 1) of the stratified samples; ``t_min``, ``t_max``: world-space
@@ -50,7 +51,9 @@ def render_rays(integrator, o, d, u, layers=("full", "bg"), samples=None, t_min=
     ``"evaluated"``: the samples evaluated per ray (occupied cells, before early termination) and
     ``"fg_coverage"``: sum_i max(w_fg,i, 0) (see :func:`march.march`), neither differentiable; with
     ``distortion`` (layers among ``full``, ``bg``), ``"distortion"``: {layer: its per-ray distortion
-    loss} (:mod:`mi_voldis.render.march`), differentiable."""
-    plan = integrator.plan(tuple(layers), samples, tuple(distortion))
+    loss} (:mod:`mi_voldis.render.march`), differentiable. ``near_grad`` > 0: gradients of samples
+    nearer the ray's origin than that world distance scaled by (d / near_grad)^2 (the march's docstring);
+    the values are unchanged."""
+    plan = integrator.plan(tuple(layers), samples, tuple(distortion), near_grad)
     tracked = tuple(f.packed for f in plan.fields if dr.grad_enabled(f.packed))
     return dr.custom(_RenderRays, tracked, plan, mi.Point3f(o), mi.Vector3f(d), mi.Float(u), t_min, t_max)
