@@ -1,6 +1,6 @@
 """Near-camera gradient scaling (``near_grad``, :mod:`mi_voldis.render.march`): with one sample per ray
 at a known distance d the scaled gradient is the plain one times min(1, (d / r)^2), exactly; the values
-are untouched; and the rig distance the fit's r is a fraction of."""
+are untouched; and the rig extent the fit's r is a fraction of."""
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -8,7 +8,7 @@ import pytest
 from helpers import axis_rays, integrator, random_field
 
 from mi_voldis.cameras import Camera, look_at
-from mi_voldis.data.scene_box import rig_distance
+from mi_voldis.data.scene_box import rig_extent
 from mi_voldis.render.rays import render_rays
 
 ROLES = ("full", "bg")
@@ -73,15 +73,12 @@ def _camera(position, target):
                   50.0, 64, 48)
 
 
-def test_rig_distance_of_an_orbit_is_its_radius():
+def test_rig_extent_is_the_orbit_radius_and_a_forward_rigs_spread():
+    """An orbit at radius 2.5 (any height): 2.5; a 3 x 2 forward grid 0.2 / 0.1 apart: its corner's
+    distance from the middle, whatever the depth it looks at."""
     centre = np.array([0.3, -0.2, 1.0])
-    cams = [_camera(centre + 2.5 * np.array([np.cos(a), 0.1, np.sin(a)]) / np.hypot(1, 0.1), centre)
-            for a in np.linspace(0, 2 * np.pi, 12, endpoint=False)]
-    assert rig_distance(cams) == pytest.approx(2.5, rel=1e-6)
-
-
-def test_rig_distance_of_a_forward_rig_is_nerfs_focus_depth():
-    """Parallel optical axes: no point ahead of them all; with depth bounds, 1 / (0.25 / near + 0.75 / far)."""
-    cams = [_camera([x, y, 0.0], [x, y, 1.0]) for x in (-0.2, 0.0, 0.2) for y in (-0.1, 0.1)]
-    near, far = 1.5, 30.0
-    assert rig_distance(cams, np.array([[near, far], [2.0, 20.0]])) == pytest.approx(1 / (0.25 / near + 0.75 / far))
+    orbit = [_camera(centre + [2.5 * np.cos(a), 0.7, 2.5 * np.sin(a)], centre)
+             for a in np.linspace(0, 2 * np.pi, 12, endpoint=False)]
+    assert rig_extent(orbit) == pytest.approx(2.5, rel=1e-6)
+    grid = [_camera([x, y, 0.0], [x, y, 40.0]) for x in (-0.2, 0.0, 0.2) for y in (-0.1, 0.1)]
+    assert rig_extent(grid) == pytest.approx(np.hypot(0.2, 0.1), rel=1e-6)

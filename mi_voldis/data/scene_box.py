@@ -23,20 +23,12 @@ def look_at_point(cameras):
     return np.linalg.lstsq(a, b, rcond=None)[0]
 
 
-def rig_distance(cameras, near_far=None, ahead_share=0.9):
-    """How far the cameras stand from what they look at (world units): the median distance to the
-    :func:`look_at_point` when it lies ahead of ``ahead_share`` of them (orbits, arcs, converging
-    rigs); else, with depth bounds, NeRF's focus depth 1 / (0.25 / near + 0.75 / far) of forward-facing
-    captures; else the median distance to that point."""
-    centre = look_at_point(cameras)
-    offsets = np.array([centre - np.asarray(c.to_world)[:3, 3] for c in cameras])
-    axes = np.array([np.asarray(c.to_world)[:3, 2] / np.linalg.norm(np.asarray(c.to_world)[:3, 2])
-                     for c in cameras])
-    ahead = np.mean(np.einsum("ij,ij->i", offsets, axes) > 0) >= ahead_share
-    if not ahead and near_far is not None:
-        near, far = float(np.min(near_far)), float(np.max(near_far))
-        return 1.0 / (0.25 / near + 0.75 / far)
-    return float(np.median(np.linalg.norm(offsets, axis=1)))
+def rig_extent(cameras):
+    """The rig's size (world units): the largest distance of a camera centre from their mean, the unit
+    nerfstudio scales a capture's poses to (centred on their mean, the largest coordinate 1). An orbit's
+    radius; a forward-facing rig's spread, small beside the depth of what it looks at."""
+    pos = np.array([np.asarray(c.to_world)[:3, 3] for c in cameras])
+    return float(np.max(np.linalg.norm(pos - pos.mean(axis=0), axis=1)))
 
 
 def world_box(cameras, margin=1.1):

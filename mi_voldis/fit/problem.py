@@ -7,7 +7,7 @@ import mitsuba as mi
 import numpy as np
 
 from .. import exposure
-from ..data.scene_box import rig_distance
+from ..data.scene_box import rig_extent
 from ..device import from_numpy
 from ..field_state import neighbour_vertices
 from ..losses import background_loss, distortion_loss, full_loss
@@ -48,7 +48,7 @@ class FieldFit:
         self.view_rates = view_rates and inputs.cfg.lr_views > 0
         # near-camera gradient scaling: r in world units (mi_voldis.render.march)
         train = [inputs.ds.cameras[v] for v in inputs.ds.train]
-        self.near_grad = inputs.cfg.near_grad * rig_distance(train, inputs.ds.near_far) if inputs.cfg.near_grad else 0.0
+        self.near_grad = inputs.cfg.near_grad * rig_extent(train) if inputs.cfg.near_grad else 0.0
         self.prior = prior  # (RayBank, pool): the guided background's 2D colour prior (mi_voldis.fit.guide)
         self.fit_exposure = fit_exposure and state.exposure is not None
         self.adam = state.adam if adam is None else adam
