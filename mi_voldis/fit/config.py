@@ -184,8 +184,9 @@ class FitConfig(Settings):
     distortion_object: float = setting(5.0, "factor on the distortion loss of rays inside the object's masks: "
                                             "one peak per object ray (haze left in front of the object would stay "
                                             "in the background and go missing from the foreground)", low=0)
-    near_grad: float = setting(0.0, "near-camera gradient scaling (Floaters No More): a sample's gradients are "
-                                    "scaled by min(1, (d / r)^2), d its distance from the camera, r this "
+    near_grad: float = setting(0.0, "near-camera gradient scaling (Floaters No More) in the full field's fit: a "
+                                    "sample's gradients are scaled by min(1, (d / r)^2), d its distance from "
+                                    "the camera, r this "
                                     "fraction of the rig's extent (nerfstudio's unit: 1 = its scaling; 0: off)",
                                low=0)
 

@@ -46,9 +46,11 @@ class FieldFit:
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
         self.density_hull = density_hull
         self.view_rates = view_rates and inputs.cfg.lr_views > 0
-        # near-camera gradient scaling: r in world units (mi_voldis.render.march)
+        # near-camera gradient scaling, r in world units (mi_voldis.render.march), in the full field's fit:
+        # the background refit steps the object's region, away from the cameras, where it would only reweigh
+        # the colour prior's views
         train = [inputs.ds.cameras[v] for v in inputs.ds.train]
-        self.near_grad = inputs.cfg.near_grad * rig_extent(train) if inputs.cfg.near_grad else 0.0
+        self.near_grad = inputs.cfg.near_grad * rig_extent(train) if inputs.cfg.near_grad and "full" in roles else 0.0
         self.prior = prior  # (RayBank, pool): the guided background's 2D colour prior (mi_voldis.fit.guide)
         self.fit_exposure = fit_exposure and state.exposure is not None
         self.adam = state.adam if adam is None else adam
