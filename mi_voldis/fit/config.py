@@ -186,9 +186,8 @@ class FitConfig(Settings):
                                             "in the background and go missing from the foreground)", low=0)
     near_grad: float = setting(0.0, "near-camera gradient scaling (Floaters No More) in the full field's fit: a "
                                     "sample's gradients are scaled by min(1, (d / r)^2), d its distance from "
-                                    "the camera, r this "
-                                    "fraction of the rig's extent (nerfstudio's unit: 1 = its scaling; 0: off)",
-                               low=0)
+                                    "the camera, r this fraction of the rig's extent (nerfstudio's unit: 1 is "
+                                    "its scaling; 0: off)", low=0)
 
     # ---- modelling only what the scene needs
     brick: int = setting(8, "vertices along a brick's edge (sparse storage unit)", choices=(4, 8, 16))

@@ -49,8 +49,9 @@ class FieldFit:
         # near-camera gradient scaling, r in world units (mi_voldis.render.march), in the full field's fit:
         # the background refit steps the object's region, away from the cameras, where it would only reweigh
         # the colour prior's views
-        train = [inputs.ds.cameras[v] for v in inputs.ds.train]
-        self.near_grad = inputs.cfg.near_grad * rig_extent(train) if inputs.cfg.near_grad and "full" in roles else 0.0
+        self.near_grad = 0.0
+        if inputs.cfg.near_grad and "full" in roles:
+            self.near_grad = inputs.cfg.near_grad * rig_extent([inputs.ds.cameras[v] for v in inputs.ds.train])
         self.prior = prior  # (RayBank, pool): the guided background's 2D colour prior (mi_voldis.fit.guide)
         self.fit_exposure = fit_exposure and state.exposure is not None
         self.adam = state.adam if adam is None else adam
@@ -202,8 +203,7 @@ class FieldFit:
             bank, pool = self.prior
             m = max(1, int(cfg.prior_rays * n))
             o, d, target, _, prior_view = bank.batch(rng, m, pool, cfg.batch_tile)
-            prior = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(m, np.float32)), ("bg",),
-                                near_grad=self.near_grad)
+            prior = render_rays(self.integrator, o, d, from_numpy(mi.Float, rng.random(m, np.float32)), ("bg",))
             err = full_loss(photo(prior["bg"], backdrop(self.inputs.ds, rng, m), prior_view), target)
             loss += cfg.prior_weight * err
             stats["psnr_prior"] = psnr_of(err)

@@ -10,6 +10,7 @@ import sys
 sys.path.insert(0, os.path.abspath(os.path.join(os.path.dirname(__file__), *[".."] * 4)))
 
 from mi_voldis.data import load_dataset  # noqa: E402
+from mi_voldis.data.types import DatasetError  # noqa: E402
 from mi_voldis.data.scene_box import rig_extent  # noqa: E402
 from mi_voldis.fit.config import FitConfig  # noqa: E402
 from mi_voldis.fit.fields import FitInputs  # noqa: E402
@@ -18,7 +19,10 @@ from mi_voldis.fit.fields import FitInputs  # noqa: E402
 def main(*paths):
     cfg = FitConfig()
     for path in paths:
-        ds = load_dataset(path)
+        try:
+            ds = load_dataset(path)
+        except DatasetError as e:
+            sys.exit(f"error: {e}")
         inputs = FitInputs.of(ds, cfg, None, progress=False)
         r = rig_extent([ds.cameras[v] for v in ds.train])
         near = float(inputs.box.near)
