@@ -75,6 +75,55 @@ def test_the_volumetric_harmonic_fill_of_an_empty_region_changes_nothing():
     np.testing.assert_array_equal(np.array(out), np.array(values))
 
 
+def test_the_filled_colour_comes_from_around_the_hull_not_from_the_vertices_views_see_in_it():
+    """hull_fill: a hull (a box of vertices) in a field of one colour c and density s, and in it a slab of
+    vertices views see (kept: their own density, and the object's tint as colour). The density fill takes
+    the kept density in as its boundary; the colour fill's boundary is the colour around the hull alone, so
+    every filled vertex takes c (the harmonic extension of a constant); the kept vertices keep their own
+    values. Filled as the density is (harmonic_fill), the colour carries the tint beside the slab."""
+    from mi_voldis.field_state import neighbour_vertices
+    from mi_voldis.fit.background import harmonic_fill as fill3d
+    from mi_voldis.fit.background import hull_fill
+    field = new_field(np.zeros(3), np.ones(3), 12, 0, -3.0, 1.0, 4)
+    pts, real = vertex_positions(field)
+    w = field.width
+    hull = real & np.all((pts > 0.25) & (pts < 0.75), axis=1)
+    kept = hull & (pts[:, 0] > 0.4) & (pts[:, 0] < 0.5)
+    inner = hull & ~kept
+    assert kept.any() and inner.sum() > kept.sum()
+    values = np.array(field.data).reshape(-1, w)
+    values[:, 0], values[:, 1:] = 1.0, 0.3  # s, c
+    values[kept, 0], values[kept, 1:] = 5.0, 2.0  # what views see in the hull: its density, the object's tint
+    values[inner, :] = np.random.default_rng(0).uniform(-4, 4, (inner.sum(), w))  # to be filled
+    packed = mi.Float(values.ravel())
+    neighbours = neighbour_vertices(field)
+    region = mi.Float(inner.astype(np.float32))
+    out = np.array(hull_fill(packed, w, region, mi.Float(hull.astype(np.float32)), neighbours)).reshape(-1, w)
+    np.testing.assert_array_equal(out[~inner], values[~inner])  # the kept vertices and the rest stay
+    np.testing.assert_allclose(out[inner, 1:], 0.3, atol=1e-4)  # the filled colour: c
+    assert (out[inner, 0] > 1.0).all() and (out[inner, 0] < 5.0).all()  # the density between s and the kept's
+    beside = inner & (np.abs(pts[:, 0] - 0.45) < 0.15)
+    assert out[beside, 0].min() > 1.5  # ... which it takes in
+    old = np.array(fill3d(packed, w, region, neighbours)).reshape(-1, w)  # every channel from all around
+    np.testing.assert_array_equal(old[:, 0], out[:, 0])
+    assert old[beside, 1:].min() > 0.3 + 0.2
+
+
+def test_hull_color_fill_changes_the_starting_backgrounds_colour_alone(tmp_path):
+    """The setting reaches the background's start: before any refit step, the background with
+    ``hull_color_fill`` has the default's density everywhere and differs in colour only, where it
+    fills."""
+    from mi_voldis.field_state import density_of
+    starts = {}
+    for on in (False, True):
+        _, _, _, state = guided_removal(tmp_path / str(on), steps_bg=0, hull_color_fill=on)
+        bg = state.fields["bg"]
+        starts[on] = (np.array(density_of(bg)), np.array(bg.data).reshape(-1, bg.width)[:, 1:bg.channels])
+    np.testing.assert_array_equal(starts[True][0], starts[False][0])
+    changed = np.any(starts[True][1] != starts[False][1], axis=1)
+    assert 0 < changed.sum() < 0.5 * len(changed)
+
+
 def test_inpainters_are_named_or_callable():
     image = np.random.default_rng(1).uniform(0, 1, (20, 24, 3)).astype(np.float32)
     hole = np.zeros((20, 24), bool)

@@ -17,8 +17,9 @@ from ..synth import family
 from .run import ground_truth_fits, new_results, save_results, strategy_rows
 
 # rows scored from each scene's full field, per half: on the tuning half the default and the candidates it
-# was chosen against; on the check half the default alone
-STRATEGIES = {"tuning": ["guided", "guided+hole_carve"], "check": ["guided"]}
+# was chosen against and the candidates for it (the hole's colour from outside the hull; hole carving); on
+# the check half the default alone
+STRATEGIES = {"tuning": ["guided", "guided+hull_color_fill", "guided+hole_carve"], "check": ["guided"]}
 ROWS = list(dict.fromkeys(STRATEGIES["tuning"] + STRATEGIES["check"]))  # every row, in report order
 
 

@@ -140,7 +140,8 @@ def start_harmonic(inputs, state, depths=None):
     is emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view sees.
     With ``keep_seen`` only the hull voxels no training view sees unmasked, or within ``keep_seen_gap``
     vertices of the object's, are inpainted; the others keep the full field's values (the fill's
-    boundary). Returns the hull, the object's voxels and those inpainted hull voxels
+    boundary; with ``hull_color_fill`` the density's alone, the colour filled from outside the hull:
+    :func:`hull_fill`). Returns the hull, the object's voxels and those inpainted hull voxels
     (:func:`background_regions`). ``depths``: the full field's median depth maps by view, read and filled
     (:func:`~mi_voldis.fit.lift.training_depths`)."""
     if inputs.cfg.hole_carve:  # room for the hidden surface where no training ray ended
@@ -151,8 +152,9 @@ def start_harmonic(inputs, state, depths=None):
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
     hull, points, obj, refill, solid = background_regions(inputs, state, neighbours, with_solid=True, depths=depths)
-    values = harmonic_fill(full.data, full.width, dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull,
-                           neighbours)
+    region = dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull
+    values = (hull_fill(full.data, full.width, region, hull, neighbours) if inputs.cfg.hull_color_fill
+              else harmonic_fill(full.data, full.width, region, neighbours))
     # the object itself: empty, its colour the fill's (:func:`emptied`)
     filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
     state.fields["bg"] = emptied(inputs, state, filled, obj)
@@ -321,14 +323,32 @@ def clear_empty_background_color(inputs, state, region=None):
     return float(dr.mean(mi.Float(empty))[0])
 
 
-def harmonic_fill(values, width, region, neighbours, iterations=300):
+def hull_fill(values, width, region, hull, neighbours):
+    """Packed ``values`` with those of ``region`` (Float per stored vertex, 1 = fill) replaced by their
+    harmonic fill (:func:`harmonic_fill`): the density's from every value around ``region``; the colour's
+    (the other channels) from the colour around ``hull`` (Float per stored vertex, ``region`` inside it)
+    alone, the vertices of the hull outside ``region`` keeping their own. Those are the cells views see
+    unmasked: beside the object's silhouette they hold its colour (its soft edge, mask edges that mix it
+    in), and a fill from them would paint the object's tint and outline into the hole, a ghost the
+    refit's 2D prior does not undo."""
+    density = harmonic_fill(values, width, region, neighbours, channels=(0, 1))
+    colour = harmonic_fill(values, width, hull, neighbours, channels=(1, width))
+    channel = dr.arange(mi.UInt32, dr.width(values)) % width
+    return dr.select(dr.repeat(region > 0, width) & (channel > 0), colour, density)
+
+
+def harmonic_fill(values, width, region, neighbours, iterations=300, channels=None):
     """Packed ``values`` inside ``region`` (Float per stored vertex, 1 = fill) replaced by the harmonic
     extension of the values around them (Jacobi iterations of the 6-neighbour Laplace equation, every
     channel), a smooth volumetric inpainting: surfaces crossing the region continue through it. Only
-    the region's values are iterated (compactly); the rest stay as they are."""
+    the region's values are iterated (compactly); the rest stay as they are. ``channels``: (first,
+    end) of the channels to fill (default all)."""
     n = dr.width(values)
     i = dr.arange(mi.UInt32, n)
-    fill = dr.compress(dr.gather(mi.Float, region, i // width) > 0)  # packed indices to fill
+    inside = dr.gather(mi.Float, region, i // width) > 0
+    if channels is not None:
+        inside &= (i % width >= channels[0]) & (i % width < channels[1])
+    fill = dr.compress(inside)  # packed indices to fill
     m = dr.width(fill)
     if m == 0:  # nothing to fill (a hull too thin for any vertex of the grid)
         return dr.copy(values)

@@ -267,6 +267,13 @@ class FitConfig(Settings):
                                           "edge by at least this much in log luminance (0.5: 39% darker) in "
                                           "every channel, pooled and in two thirds of the views that see it; "
                                           "0: off", low=0)
+    hull_color_fill: bool = setting(False, "with keep_seen, the hull vertices the fill inpaints take their colour "
+                                           "from outside the hull alone, not from the vertices views see in it "
+                                           "(those keep their own): beside the object's silhouette these hold the "
+                                           "object's tint, and a fill from them paints a ghost of it into the hole "
+                                           "(off by default: on the removal family it lifts most margins, but the "
+                                           "removal bench's scenes are not yet measured with it; reports/notes.md; "
+                                           "bg_strategy 'harmonic', 'guided')")
     keep_seen_gap: int = setting(1, "with keep_seen, hull vertices within this many vertices of the object's own "
                                     "voxels are filled even where a view sees them unmasked: the object's soft "
                                     "edge, which views see beside its silhouette, leaves with it (0: none)",

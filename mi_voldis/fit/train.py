@@ -16,7 +16,8 @@ Phases (``bg_strategy``):
   rays near the masks. Outside the hull the two fields' densities are identical, so on a ray the
   foreground w_full - w_bg is exactly zero until it reaches the hull; with ``keep_seen`` (default) the
   hull voxels some training view sees unmasked keep the full field's density too (their colour is
-  refitted), except within ``keep_seen_gap`` vertices of the object's voxels (its soft edge).
+  refitted), except within ``keep_seen_gap`` vertices of the object's voxels (its soft edge); with
+  ``hull_color_fill`` the filled voxels' colour comes from outside the hull alone.
 * ``guided`` (default): ``harmonic``, and the refit adds a 2D colour prior on the masked rays of every masked
   training view (each view's photo inpainted in its mask, occluders in front of the object left out of
   the inpainting's sources; weight ``prior_weight`` against 1 for L_bg, :mod:`mi_voldis.fit.guide`):

@@ -10,8 +10,8 @@ import sys
 sys.path.insert(0, os.path.abspath(os.path.join(os.path.dirname(__file__), *[".."] * 4)))
 
 from mi_voldis.data import load_dataset  # noqa: E402
-from mi_voldis.data.types import DatasetError  # noqa: E402
 from mi_voldis.data.scene_box import rig_extent  # noqa: E402
+from mi_voldis.data.types import DatasetError  # noqa: E402
 from mi_voldis.fit.config import FitConfig  # noqa: E402
 from mi_voldis.fit.fields import FitInputs  # noqa: E402
 
