@@ -7,8 +7,11 @@ W=${W:-/tmp/family}; T=${T:-/tmp/family_tv2}; O=${O:-/tmp/color_fill}
 PY=${PYTHON:-.venv/bin/python}
 E=reports/experiments/2026-11-28/color_fill
 $PY scripts/bench.py --family --work $W --report $O/report   # the default fits and their `guided` rows
-for k in 00 01 02 03 04 05 06 07 17; do   # rows_default_fits_on.txt
+for k in 00 01 02 03 04 05 06 07 08 17; do   # rows_default_fits_on.txt
   $PY $E/rows.py $O/on $W/runs/family${k}_0 --set hull_color_fill=true
+done
+for k in 06 02 01 04; do   # rows_default_fits_on_hole_carve.txt
+  $PY $E/rows.py $O/hc_on $W/runs/family${k}_0 --set hull_color_fill=true --set hole_carve=true
 done
 for k in 04 16 05 11 13; do   # rows_tv2_fits_on.txt (rows_tv2_fits_off.txt: the trial's own `guided` rows)
   $PY $E/rows.py $O/tv2_on $T/runs/family${k}_0 --set hull_color_fill=true
