@@ -271,9 +271,7 @@ class FitConfig(Settings):
                                            "from outside the hull alone, not from the vertices views see in it "
                                            "(those keep their own): beside the object's silhouette these hold the "
                                            "object's tint, and a fill from them paints a ghost of it into the hole "
-                                           "(off by default: on the removal family it lifts most margins, but the "
-                                           "removal bench's scenes are not yet measured with it; reports/notes.md; "
-                                           "bg_strategy 'harmonic', 'guided')")
+                                           "(off by default, reports/notes.md; bg_strategy 'harmonic', 'guided')")
     keep_seen_gap: int = setting(1, "with keep_seen, hull vertices within this many vertices of the object's own "
                                     "voxels are filled even where a view sees them unmasked: the object's soft "
                                     "edge, which views see beside its silhouette, leaves with it (0: none)",

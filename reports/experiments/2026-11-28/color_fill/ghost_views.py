@@ -20,9 +20,15 @@ def main(argv):
     plain = [a for k, a in enumerate(argv) if a != "--set" and (k == 0 or argv[k - 1] != "--set")]
     if len(plain) != 3:
         raise SystemExit(__doc__.strip().splitlines()[3].strip())
-    run, out, views = plain[0], plain[1], [int(v) for v in plain[2].split(",")]
+    run, out = plain[0], plain[1]
+    try:
+        views = [int(v) for v in plain[2].split(",")]
+    except ValueError:
+        raise SystemExit(f"error: VIEWS {plain[2]!r}: give view indices separated by commas, e.g. 0,1,8") from None
     if os.path.exists(out):
         raise SystemExit(f"error: {out}: exists; give a new file")
+    if not os.path.isfile(os.path.join(run, "checkpoints", "last.npz")):
+        raise SystemExit(f"error: {run}: no checkpoints/last.npz (a fit kept with --keep-checkpoints)")
     from mi_voldis.bench.strategies import refit_config
     from mi_voldis.data import load_dataset
     from mi_voldis.fit.fields import fit_integrator
@@ -33,7 +39,10 @@ def main(argv):
     from mi_voldis.metrics import dilate, psnr
     from mi_voldis.optim.adam import Adam
     from mi_voldis.render.views import render_camera
-    cfg = refit_config(run, "guided", sets)
+    try:
+        cfg = refit_config(run, "guided", sets)
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
     with open(os.path.join(run, "config.json")) as f:
         record = json.load(f)["dataset"]
     ds = load_dataset(record["path"], record["format"], record["holdout"])
@@ -51,6 +60,8 @@ def main(argv):
     scored = int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size)))  # the removal score's
     paint = inpainter(cfg.prior_inpainter)
     rows = []
+    if not all(0 <= v < len(ds.cameras) for v in views):
+        raise SystemExit(f"error: VIEWS {plain[2]}: {record['path']} has views 0-{len(ds.cameras) - 1}")
     for v in views:
         bg = np.clip(render_camera(integrator, ds.cameras[v], ("bg",))["bg"][0], 0, 1)
         prior = paint(np.clip(ds.images[v], 0, 1), dilate(ds.masks[v], grow))[..., :3]

@@ -37,9 +37,14 @@ def main(argv):
             for s in sets:
                 args += ["--set", s]
             os.makedirs(out, exist_ok=True)
-            with open(os.path.join(out, name + ".log"), "x") as log:
+            path = os.path.join(out, name + ".log")
+            try:
+                log = open(path, "x")  # a log left by an earlier try stays as it is
+            except FileExistsError:
+                raise SystemExit(f"error: {path}: exists (an earlier refit's log): give another OUT") from None
+            with log:
                 if subprocess.call(args, stdout=log, stderr=subprocess.STDOUT):
-                    raise SystemExit(f"error: {run}: the refit failed (see {log.name})")
+                    raise SystemExit(f"error: {run}: the refit failed (see {path})")
         with open(done) as f:
             print(margin_line(json.load(f), name), flush=True)
 

@@ -21,3 +21,7 @@ done
 $PY $E/ghost_views.py $W/runs/family06_0 $E/family06_start.png 0,1,8,9 --set steps_bg=0
 $PY $E/ghost_views.py $W/runs/family06_0 $E/family06_default.png 0,1,8,9
 $PY $E/ghost_views.py $W/runs/family06_0 $E/family06_hull_color_fill.png 0,1,8,9 --set hull_color_fill=true
+$PY $E/sphere.py   # sphere.txt
+for s in "" "--set hole_carve=true" "--set hull_color_fill=true"; do   # front_weight.txt
+  $PY $E/front_weight.py $W/runs/family06_0 $s
+done
