@@ -29,5 +29,5 @@ $PY reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu_20
 # degree 1 at 4 GiB and at 8 GiB; rows the full layer of held-out views 0 and 16, then view 16's depth; from the
 # runs' previews/view{000,016}_{full,depth}.png, halved
 # the prior variants on family06 (trial code outside the repo: see the notes) were refitted with
-#   reports/experiments/2026-11-28/color_fill/rows.py OUT $FAMILY_WORK/runs/family06_0 [--set bg_strategy=clear]
+#   reports/experiments/2026-11-28/color_fill/rows.py OUT $FAMILY_WORK/runs/family06_0 [--set bg_strategy=clear | --set object_alpha=0.05]
 # fern_distortion_view008.png: held-out view 8 of the default (fern_h of cpu_2026-11-27_step_auto.json), 0.02 and 0.05; rows previews/view008_full.png and view008_depth.png, at 2/3 size
