@@ -8,56 +8,28 @@ in as disparity, ``mi_voldis.fit.visibility.hidden_depth``), and the full field'
 RUN: a fit kept with --keep-checkpoints. Without --set its own background is read; with settings it is
 refitted with them first (in a temporary folder). VIEWS: how many held-out views (default 2).
 """
-import json
-import os
 import sys
-import tempfile
 
 import numpy as np
+from refitted import refitted, split_sets
 
 
 def main(argv):
-    sets = [argv[k + 1] for k, a in enumerate(argv) if a == "--set"]
-    plain = [a for k, a in enumerate(argv) if a != "--set" and (k == 0 or argv[k - 1] != "--set")]
+    sets, plain = split_sets(argv)
     if not 1 <= len(plain) <= 2 or (len(plain) == 2 and not plain[1].isdigit()):
         raise SystemExit(__doc__.strip().splitlines()[5].strip())
     run, count = plain[0], int(plain[1]) if len(plain) == 2 else 2
-    if not os.path.isfile(os.path.join(run, "checkpoints", "last.npz")):
-        raise SystemExit(f"error: {run}: no checkpoints/last.npz (a fit kept with --keep-checkpoints)")
     import drjit as dr
     import mitsuba as mi
 
-    from mi_voldis.bench.strategies import refit_config
     from mi_voldis.cameras import pixel_of, pixel_rays
-    from mi_voldis.data import load_dataset
     from mi_voldis.device import from_numpy
     from mi_voldis.field_state import vertex_positions
-    from mi_voldis.fit.fields import fit_integrator
-    from mi_voldis.fit.state import FitState
-    from mi_voldis.fit.train import fit
     from mi_voldis.fit.visibility import hidden_depth
     from mi_voldis.metrics import dilate
-    from mi_voldis.optim.adam import Adam
     from mi_voldis.render import march
     from mi_voldis.render.surface import median_depth
-    try:
-        cfg = refit_config(run, "guided", sets)
-    except ValueError as e:
-        raise SystemExit(f"error: {e}") from None
-    with open(os.path.join(run, "config.json")) as f:
-        record = json.load(f)["dataset"]
-    ds = load_dataset(record["path"], record["format"], record["holdout"])
-    state = FitState.load(os.path.join(run, "checkpoints", "last.npz"),
-                          Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup))
-    if sets:
-        state.fields.pop("bg", None)
-        state.hull_points = state.prior = state.prior_keys = state.occupancy = None
-        state.adam.reset()
-    with tempfile.TemporaryDirectory() as tmp:
-        checkpoint = os.path.join(tmp, "state.npz")
-        state.save(checkpoint, "bg" if sets else "done", 0)
-        inputs, state = fit(ds, checkpoint, cfg, resume=True, progress=False)
-    integrator = fit_integrator(inputs, state)
+    ds, cfg, inputs, state, integrator = refitted(run, sets, refit=bool(sets))
     full = state.fields["full"]
     pts, real = vertex_positions(full)
     world = inputs.space.to_world_np(pts)

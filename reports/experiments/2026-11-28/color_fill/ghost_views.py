@@ -7,17 +7,15 @@ and the true background side by side, with PSNRs in the dilated mask.
 RUN: a fit kept with --keep-checkpoints (a family run); VIEWS: comma-separated view indices; OUT.png must
 not exist. With --set steps_bg=0 the sheet shows how the background starts, before its refit.
 """
-import json
 import os
 import sys
-import tempfile
 
 import numpy as np
+from refitted import refitted, split_sets
 
 
 def main(argv):
-    sets = [argv[k + 1] for k, a in enumerate(argv) if a == "--set"]
-    plain = [a for k, a in enumerate(argv) if a != "--set" and (k == 0 or argv[k - 1] != "--set")]
+    sets, plain = split_sets(argv)
     if len(plain) != 3:
         raise SystemExit(__doc__.strip().splitlines()[3].strip())
     run, out = plain[0], plain[1]
@@ -27,41 +25,17 @@ def main(argv):
         raise SystemExit(f"error: VIEWS {plain[2]!r}: give view indices separated by commas, e.g. 0,1,8") from None
     if os.path.exists(out):
         raise SystemExit(f"error: {out}: exists; give a new file")
-    if not os.path.isfile(os.path.join(run, "checkpoints", "last.npz")):
-        raise SystemExit(f"error: {run}: no checkpoints/last.npz (a fit kept with --keep-checkpoints)")
-    from mi_voldis.bench.strategies import refit_config
-    from mi_voldis.data import load_dataset
-    from mi_voldis.fit.fields import fit_integrator
-    from mi_voldis.fit.state import FitState
-    from mi_voldis.fit.train import fit
     from mi_voldis.inpaint2d import inpainter
     from mi_voldis.io.images import display_to_uint8, write_png
     from mi_voldis.metrics import dilate, psnr
-    from mi_voldis.optim.adam import Adam
     from mi_voldis.render.views import render_camera
-    try:
-        cfg = refit_config(run, "guided", sets)
-    except ValueError as e:
-        raise SystemExit(f"error: {e}") from None
-    with open(os.path.join(run, "config.json")) as f:
-        record = json.load(f)["dataset"]
-    ds = load_dataset(record["path"], record["format"], record["holdout"])
-    state = FitState.load(os.path.join(run, "checkpoints", "last.npz"),
-                          Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup))
-    state.fields.pop("bg", None)
-    state.hull_points = state.prior = state.prior_keys = state.occupancy = None
-    state.adam.reset()
-    with tempfile.TemporaryDirectory() as tmp:
-        checkpoint = os.path.join(tmp, "state.npz")
-        state.save(checkpoint, "bg", 0)
-        inputs, state = fit(ds, checkpoint, cfg, resume=True, progress=False)
-    integrator = fit_integrator(inputs, state)
+    ds, cfg, _, _, integrator = refitted(run, sets)
     grow = int(np.ceil(0.01 * np.hypot(*ds.size)))  # the prior's mask growth (mi_voldis.fit.guide)
     scored = int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size)))  # the removal score's
     paint = inpainter(cfg.prior_inpainter)
     rows = []
     if not all(0 <= v < len(ds.cameras) for v in views):
-        raise SystemExit(f"error: VIEWS {plain[2]}: {record['path']} has views 0-{len(ds.cameras) - 1}")
+        raise SystemExit(f"error: VIEWS {plain[2]}: {ds.root} has views 0-{len(ds.cameras) - 1}")
     for v in views:
         bg = np.clip(render_camera(integrator, ds.cameras[v], ("bg",))["bg"][0], 0, 1)
         prior = paint(np.clip(ds.images[v], 0, 1), dilate(ds.masks[v], grow))[..., :3]

@@ -12,6 +12,8 @@ import os
 import subprocess
 import sys
 
+from refitted import split_sets
+
 
 def margin_line(metrics, name):
     m = metrics["methods"]
@@ -23,8 +25,7 @@ def margin_line(metrics, name):
 
 
 def main(argv):
-    sets = [argv[k + 1] for k, a in enumerate(argv) if a == "--set"]
-    plain = [a for k, a in enumerate(argv) if a != "--set" and (k == 0 or argv[k - 1] != "--set")]
+    sets, plain = split_sets(argv)
     if len(plain) < 2:
         raise SystemExit(__doc__.strip().splitlines()[2].strip())
     out, runs = plain[0], plain[1:]

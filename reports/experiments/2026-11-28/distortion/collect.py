@@ -3,8 +3,10 @@ log, into one JSON (the layout of reports/captures/cpu_*.json).
 
     python reports/experiments/2026-11-28/distortion/collect.py OUT.json "COMMAND" "NOTE" NAME=RUN[:LOG] ...
 
-LOG defaults to RUN.log (train.py's output followed by time's report)."""
+LOG defaults to RUN.log (train.py's output followed by time's report). OUT.json may exist only as a file this
+script wrote (it is then replaced), never as anything else."""
 import json
+import os
 import re
 import sys
 
@@ -21,10 +23,23 @@ def wall(log):
     return sum(p * 60 ** k for k, p in enumerate(reversed(parts)))
 
 
+def ours(path):
+    """Whether ``path`` is absent or a rows file this script wrote (the only thing it may replace)."""
+    if not os.path.lexists(path):
+        return True
+    try:
+        with open(path) as f:
+            return os.path.isfile(path) and set(json.load(f)) == {"command", "note", "runs"}
+    except (OSError, ValueError):
+        return False
+
+
 def main(argv):
     if len(argv) < 4:
         raise SystemExit(__doc__.strip().splitlines()[3].strip())
     out, command, note, pairs = argv[0], argv[1], argv[2], argv[3:]
+    if not ours(out):
+        raise SystemExit(f"collect.py: {out}: exists and is not a rows file of this script; give a new file")
     runs = {}
     for pair in pairs:
         name, _, spec = pair.partition("=")
