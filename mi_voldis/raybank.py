@@ -3,6 +3,11 @@
 Colours, masks and camera parameters live on the device; a batch is a set of pixel indices, turned
 into world rays there (a random position inside each pixel, as a box-filtered film integrates).
 
+Photographs stored at 8 bits (every value one of k / 255) are kept as one UInt32 a pixel, the three
+codes and the mask bit (4 bytes where float colours and mask take 16: half a GiB on a 185-view capture at
+512^2), decoded through a table of the very floats the dataset holds, so a batch's colours are the dataset's
+bit for bit; other images keep float colours and a float mask (none where the dataset has no masks).
+
 A batch can come in t x t pixel tiles (each around a random pixel of a random view): the rays of a
 tile march side by side through the same cells, so the grid lookups of one SIMD packet share cache
 lines. Pixels are still drawn uniformly (up to clipping at image borders).
@@ -20,10 +25,16 @@ class RayBank:
         self.views = np.asarray(views)
         n, (h, w) = len(self.views), dataset.size
         self.height, self.width = h, w
-        self.colors = mi.Float(dataset.images[self.views].reshape(-1))
         masks = dataset.masks[self.views] if dataset.masks is not None else np.zeros((n, h, w), bool)
         self.masks_np = masks
-        self.masks = mi.Float(masks.reshape(-1).astype(np.float32))
+        packed = packed_pixels(dataset.images, self.views, masks)
+        self.codes = None if packed is None else mi.UInt32(packed.reshape(-1))
+        if packed is None:
+            self.colors = mi.Float(dataset.images[self.views].reshape(-1))
+            # no masks: no array of zeros (a batch's mask is then a constant)
+            self.masks = None if dataset.masks is None else mi.Float(masks.reshape(-1).astype(np.float32))
+        else:
+            self.levels = mi.Float(EIGHT_BIT_LEVELS)
         # nerfstudio's pixels to ignore: batches without a pool of their own draw from the others
         ignore = dataset.ignore[self.views] if dataset.ignore is not None else None
         self.ignore_np = ignore
@@ -58,9 +69,31 @@ class RayBank:
         u = (mi.Float(px) + from_numpy(mi.Float, jitter[:, 0])) / self.width
         v = (mi.Float(py) + from_numpy(mi.Float, jitter[:, 1])) / self.height
         o, d = self.table.rays(view, u, v)
-        color = dr.gather(mi.Color3f, self.colors, index)
-        mask = dr.gather(mi.Float, self.masks, index)
+        if self.codes is None:
+            color = dr.gather(mi.Color3f, self.colors, index)
+            mask = dr.zeros(mi.Float, dr.width(index)) if self.masks is None else dr.gather(mi.Float, self.masks, index)
+        else:
+            code = dr.gather(mi.UInt32, self.codes, index)
+            color = mi.Color3f(*(dr.gather(mi.Float, self.levels, (code >> shift) & 255) for shift in (0, 8, 16)))
+            mask = mi.Float(code >> 24)
         return o, d, color, mask, view
+
+
+# the floats an 8-bit photograph holds once read (mi_voldis.data.images: code / 255 in float32)
+EIGHT_BIT_LEVELS = np.arange(256, dtype=np.float32) / np.float32(255)
+
+
+def packed_pixels(images, views, masks):
+    """(n, H, W) uint32 of the ``views`` of float ``images``: the 8-bit codes of R, G and B in bytes 0-2
+    and the (n, H, W) bool ``masks`` in bit 24; None unless every value is one of EIGHT_BIT_LEVELS. A view
+    at a time: no float copy of the images."""
+    out = np.empty(masks.shape, np.uint32)
+    for i, v in enumerate(views):
+        codes = np.rint(np.clip(images[v], 0.0, 1.0) * 255).astype(np.uint32)
+        if not np.array_equal(EIGHT_BIT_LEVELS[codes], images[v]):
+            return None
+        out[i] = codes[..., 0] | (codes[..., 1] << 8) | (codes[..., 2] << 16) | (masks[i].astype(np.uint32) << 24)
+    return out
 
 
 def tile_pixels(rng, anchors, tile, height, width):

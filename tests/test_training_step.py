@@ -191,6 +191,33 @@ def test_packed_regularisers_match_the_tensor_formulas():
     assert not packed[:, 13:].any() and not packed[:b3].any()
 
 
+@pytest.mark.parametrize("kind", ["8-bit", "float", "float, no masks"])
+def test_a_batch_holds_the_datasets_pixels_bit_for_bit_packed_or_not(tiny_dataset, kind):
+    """8-bit photographs are kept as one UInt32 a pixel (codes and mask bit), others as floats (and no mask
+    array where the dataset has no masks): either way a batch's colours and masks are the dataset's own
+    values at its pixels."""
+    from mi_voldis.data import load_dataset
+    from mi_voldis.raybank import RayBank
+    ds = load_dataset(tiny_dataset)
+    masks = ds.masks.copy()
+    assert masks.any()
+    if kind != "8-bit":
+        ds.images = ds.images.copy()
+        ds.images[ds.train[-1], 3, 5, 1] += 1e-3  # one value off the 8-bit levels: floats for the whole bank
+    if kind == "float, no masks":
+        ds.masks, masks = None, np.zeros_like(masks)
+    bank = RayBank(ds, ds.train)
+    assert (bank.codes is not None) == (kind == "8-bit")
+    assert (kind == "float, no masks") == (bank.codes is None and bank.masks is None)
+    index = np.random.default_rng(0).integers(0, bank.pixels, 500).astype(np.uint32)
+    index[0] = (len(ds.train) - 1) * bank.height * bank.width + 3 * bank.width + 5  # the changed pixel
+    _, _, color, mask, _ = bank.rays(index, np.full((500, 2), 0.5, np.float32))
+    view, pixel = np.divmod(index, bank.height * bank.width)
+    photos = ds.images[ds.train].reshape(len(ds.train), -1, 3)
+    np.testing.assert_array_equal(np.array(color).T, photos[view, pixel])
+    np.testing.assert_array_equal(np.array(mask), masks[ds.train].reshape(len(ds.train), -1)[view, pixel])
+
+
 def test_tiles_cover_their_anchor_inside_the_image():
     rng = np.random.default_rng(0)
     h, w, t = 7, 9, 4

@@ -1,0 +1,124 @@
+"""TRIAL, not the package's optimiser (reports/notes.md, 2026-11-28, "Adam's moments written in place"):
+mi_voldis/optim/adam.py as it was tried, its moments written in place through a view of their memory.
+
+Adam on named Dr.Jit tensors, with per-parameter learning rates and inspectable state.
+
+    m <- b1 m + (1 - b1) g,   v <- b2 v + (1 - b2) g^2,
+    x <- x - lr * (m / (1 - b1^t)) / (sqrt(v / (1 - b2^t)) + eps)
+
+The state (m, v, t) is plain arrays so that checkpoints can store and restore it exactly. Parameters
+are tensors or flat arrays; a learning rate is a number, or a list of rates applied periodically
+along the flat array (one per channel of an interleaved grid, see :mod:`mi_voldis.grid`).
+``warmup``: the learning rate ramps up linearly over this many steps after a (re)start, so that the
+first, sign-like Adam steps after a grid is resampled do not jolt it. ``scales[key]``, where set: a Float
+as wide as the parameter that multiplies its step element by element (learning rates per vertex:
+Adam's step is invariant to the scale of a gradient, so scaling the gradient would not do);
+``growth[key]``, where set: the same, but only on the steps that increase an element.
+``subsets[key]``, where set: the UInt32 indices of the only elements that may change (a refit inside a
+region): the moments are kept for them alone and ``grads[key]`` holds the gradient at them, in their order.
+Elements whose gradient is always zero never move under Adam (their moments stay zero), so this steps
+exactly as the whole array with the gradient masked to the subset would, on memory and time of its size.
+
+The moments are written in place. Dr.Jit copies an array before it scatters into it while anything else
+refers to it, a pending read of it included, so an update written as m <- f(m) allocates a second m. The
+step reads the old moments through a view of their memory (:func:`memory_view`, a second variable that does
+not own it) and scatters the new ones into the arrays themselves, each element by the lane that read it: at a
+fit's peak, two grid-sized arrays fewer than three new outputs beside the four inputs. The values are written
+out of place (renderers and fit states hold them).
+"""
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from mi_voldis.device import from_numpy
+
+
+def memory_view(array):
+    """A Float over the memory of the evaluated Float ``array``, as a second Dr.Jit variable that does not
+    own it (Dr.Jit's zero-copy import): reads through it are not references to ``array``, so a kernel can
+    scatter into ``array`` in place while reading it. Valid while ``array`` lives."""
+    dr.eval(array)
+    return mi.Float(dr.detail.import_tensor(array, False).array)
+
+
+class Adam:
+    def __init__(self, lrs, beta1=0.9, beta2=0.99, eps=1e-8, warmup=0):
+        self.lrs = dict(lrs)
+        self.beta1, self.beta2, self.eps, self.warmup = beta1, beta2, eps, warmup
+        self.m, self.v, self.t = {}, {}, {}
+        self.scales = {}  # key -> Float: per-element factors on the step (they follow the lattice, not the moments)
+        self.growth = {}  # key -> Float: per-element factors on the steps that increase an element
+        self.subsets = {}  # key -> UInt32: the elements stepped, the gradient given at them alone
+
+    def reset(self, key=None):
+        """Forget the moments (of one parameter, or all): e.g. after a grid is resampled."""
+        for store in (self.m, self.v, self.t):
+            if key is None:
+                store.clear()
+            else:
+                store.pop(key, None)
+
+    def step(self, params, grads, scale=1.0):
+        """Update ``params[key]`` (TensorXf or Float) with ``grads[key]`` (flat Float) for every key
+        with a learning rate; ``scale`` multiplies every learning rate (schedules)."""
+        for key, lr in self.lrs.items():
+            if not np.any(lr) or key not in grads or grads[key] is None:
+                continue
+            x = params[key]
+            g = dr.detach(grads[key])
+            subset = self.subsets.get(key)
+            if subset is not None and dr.width(subset) == 0:  # nothing may change
+                continue
+            if key not in self.m or dr.width(self.m[key]) != dr.width(g):
+                # opaque zeros: the first update then runs the same kernel as every later one
+                self.m[key], self.v[key] = dr.opaque(mi.Float, 0.0, dr.width(g)), dr.opaque(mi.Float, 0.0, dr.width(g))
+                self.t[key] = 0
+            self.t[key] += 1
+            t = self.t[key]
+            ramp = min(1.0, t / self.warmup) if self.warmup else 1.0
+            # numbers that change every step enter as arrays, not as constants compiled into the
+            # kernel: else the update kernel would compile anew at every step
+            step = dr.opaque(mi.Float, scale * ramp * np.sqrt(1 - self.beta2 ** t) / (1 - self.beta1 ** t))
+            eps = dr.opaque(mi.Float, self.eps * np.sqrt(1 - self.beta2 ** t))
+            index = dr.arange(mi.UInt32, dr.width(g)) if subset is None else subset
+            if np.ndim(lr):  # per-slot rates, periodic along the array
+                step = dr.gather(mi.Float, from_numpy(mi.Float, lr), index % len(lr)) * step
+            else:
+                step = lr * step
+            if key in self.scales:
+                step = self._at(self.scales[key], subset) * step
+            m = dr.fma(self.beta1, memory_view(self.m[key]), (1 - self.beta1) * g)
+            v = dr.fma(self.beta2, memory_view(self.v[key]), (1 - self.beta2) * dr.square(g))
+            update = m * (step / (dr.sqrt(v) + eps))
+            if key in self.growth:  # x - update grows where update < 0
+                update = dr.select(update < 0.0, update * self._at(self.growth[key], subset), update)
+            flat = dr.detach(x.array if isinstance(x, mi.TensorXf) else x)
+            if subset is None:
+                flat = flat - update
+            else:  # the stepped elements written into a copy of the array (Dr.Jit copies a shared one)
+                flat = mi.Float(flat)
+                dr.scatter(flat, dr.gather(mi.Float, flat, subset) - update, subset)
+            lane = dr.arange(mi.UInt32, dr.width(g))
+            dr.scatter(self.m[key], m, lane)
+            dr.scatter(self.v[key], v, lane)
+            params[key] = mi.TensorXf(flat, x.shape) if isinstance(x, mi.TensorXf) else flat
+            # evaluated now, in one kernel: the views must not outlive the reads they serve
+            dr.eval(params[key], self.m[key], self.v[key])
+
+    @staticmethod
+    def _at(values, subset):
+        """Per-element ``values`` at the stepped elements (all of them without a ``subset``)."""
+        return values if subset is None else dr.gather(mi.Float, values, subset)
+
+    def state(self):
+        """{'m/key': array, 'v/key': array} and {'key': t} for checkpoints."""
+        arrays = {f"m/{k}": np.array(v) for k, v in self.m.items()}
+        arrays.update({f"v/{k}": np.array(v) for k, v in self.v.items()})
+        return arrays, dict(self.t)
+
+    def load(self, arrays, t):
+        self.reset()
+        for key, count in t.items():
+            self.m[key] = mi.Float(arrays[f"m/{key}"])
+            self.v[key] = mi.Float(arrays[f"v/{key}"])
+            self.t[key] = int(count)
