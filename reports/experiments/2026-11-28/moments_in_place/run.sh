@@ -7,6 +7,8 @@ set -e
 D=${DATA:-../shared/data}
 python reports/experiments/2026-11-28/moments_in_place/adam_peak.py 45e6 4 2 > reports/experiments/2026-11-28/moments_in_place/adam_peak.txt
 python reports/experiments/2026-11-28/moments_in_place/adam_peak.py 29.5e6 16 2 >> reports/experiments/2026-11-28/moments_in_place/adam_peak.txt
+python reports/experiments/2026-11-28/moments_in_place/bare_kernel.py oop flat packet \
+  > reports/experiments/2026-11-28/moments_in_place/bare_kernel.txt
 python reports/experiments/2026-11-27/memory/phase_peaks.py -- $D/statue --out runs/statue_mem_views \
   --set 'resolution_schedule=[[0,64],[200,368]]' --set steps_full=450
 /usr/bin/time -v python scripts/train.py $D/fern --out runs/fern_ip > runs/fern_ip.log 2>&1
