@@ -89,7 +89,8 @@ def packed_pixels(images, views, masks):
     at a time: no float copy of the images."""
     out = np.empty(masks.shape, np.uint32)
     for i, v in enumerate(views):
-        codes = np.rint(np.clip(images[v], 0.0, 1.0) * 255).astype(np.uint32)
+        with np.errstate(invalid="ignore"):  # a NaN casts to some integer: kept in range, it fails the comparison
+            codes = np.minimum(np.rint(np.clip(images[v], 0.0, 1.0) * 255).astype(np.uint32), 255)
         if not np.array_equal(EIGHT_BIT_LEVELS[codes], images[v]):
             return None
         out[i] = codes[..., 0] | (codes[..., 1] << 8) | (codes[..., 2] << 16) | (masks[i].astype(np.uint32) << 24)

@@ -218,6 +218,22 @@ def test_a_batch_holds_the_datasets_pixels_bit_for_bit_packed_or_not(tiny_datase
     np.testing.assert_array_equal(np.array(mask), masks[ds.train].reshape(len(ds.train), -1)[view, pixel])
 
 
+def test_images_off_the_8_bit_levels_are_not_packed_and_raise_no_warning():
+    """Values above 1, between two levels or NaN (images a caller made, not read from files): floats."""
+    import warnings
+
+    from mi_voldis.raybank import EIGHT_BIT_LEVELS, packed_pixels
+    masks = np.zeros((1, 2, 2), bool)
+    base = np.broadcast_to(EIGHT_BIT_LEVELS[[0, 7, 200, 255]].reshape(1, 2, 2, 1), (1, 2, 2, 3)).copy()
+    assert packed_pixels(base, [0], masks) is not None
+    for bad in (1.5, 0.5, np.nan):
+        images = base.copy()
+        images[0, 1, 0, 2] = bad
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            assert packed_pixels(images, [0], masks) is None
+
+
 def test_tiles_cover_their_anchor_inside_the_image():
     rng = np.random.default_rng(0)
     h, w, t = 7, 9, 4

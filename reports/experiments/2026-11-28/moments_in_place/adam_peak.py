@@ -1,7 +1,8 @@
 """Adam's step on one grid-sized array: the package's optimiser (moments and values written as three new arrays)
-against the trial beside this script (``adam_in_place.py``: the moments written in place), each in a process of
-its own, in turns. Dr.Jit's allocator figures after 8 steps ("in use / held (peak)", ``dr.whos()``), the median
-time of steps 3-8 (kernel evaluated), and the last value, which both must give alike (reports/notes.md).
+against the trial beside this script (``adam_in_place.diff``, applied to a copy of it: the moments written in
+place), each in a process of its own, in turns. Dr.Jit's allocator figures after 8 steps ("in use / held
+(peak)", ``dr.whos()``), the median time of steps 3-8 (kernel evaluated), and the last value, which both must
+give alike (reports/notes.md).
 
     python reports/experiments/2026-11-28/moments_in_place/adam_peak.py [FLOATS [WIDTH [ROUNDS]]]
 
@@ -11,12 +12,31 @@ import contextlib
 import importlib.util
 import io
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, *[".."] * 4))
+
+
+def trial_adam():
+    """mi_voldis/optim/adam.py with adam_in_place.diff applied, in a folder of its own, loaded as a module."""
+    with tempfile.TemporaryDirectory() as folder:
+        os.makedirs(os.path.join(folder, "mi_voldis", "optim"))
+        path = os.path.join(folder, "mi_voldis", "optim", "adam.py")
+        shutil.copy(os.path.join(ROOT, "mi_voldis", "optim", "adam.py"), path)
+        subprocess.run(["git", "apply", os.path.join(HERE, "adam_in_place.diff")], cwd=folder, check=True)
+        with open(path) as f:
+            source = f.read().replace("from ..device", "from mi_voldis.device")
+        with open(path, "w") as f:
+            f.write(source)
+        spec = importlib.util.spec_from_file_location("adam_in_place", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    return module
 
 
 def one(version, n, width):
@@ -28,9 +48,7 @@ def one(version, n, width):
     if version == "package":
         from mi_voldis.optim import adam as module
     else:
-        spec = importlib.util.spec_from_file_location("adam_in_place", os.path.join(HERE, "adam_in_place.py"))
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
+        module = trial_adam()
     params = {"x": dr.arange(mi.Float, n) * 1e-9}
     dr.eval(params["x"])
     adam = module.Adam({"x": [0.1] + [0.05] * (width - 1)}, warmup=10)

@@ -6,20 +6,21 @@ bare kernels do not show the optimiser's in-place slowdown, which is not yet exp
 
     python reports/experiments/2026-11-28/moments_in_place/bare_kernel.py oop flat packet
 """
-import os
 import sys
 import time
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-sys.path.insert(0, os.path.abspath(os.path.join(HERE, *[".."] * 4)))
 
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
 mi.set_variant("llvm_ad_rgb")
-from adam_in_place import memory_view  # noqa: E402
+
+
+def memory_view(array):
+    """A second Dr.Jit variable over ``array``'s memory (zero-copy import), as adam_in_place.diff reads it."""
+    dr.eval(array)
+    return mi.Float(dr.detail.import_tensor(array, False).array)
+
 
 N = 45_000_000
 

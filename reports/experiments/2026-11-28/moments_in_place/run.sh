@@ -1,7 +1,8 @@
 #!/bin/bash
 # The commands behind reports/notes.md, 2026-11-28 (thirteenth session). Run from the repository root, each
-# alone on the machine. The in-place rows ran with adam_in_place.py copied over mi_voldis/optim/adam.py (its
-# import of mi_voldis.device made relative again); the 240 rows with BYTES_PER_VERTEX = 240 in
+# alone on the machine. The in-place rows (statue_mem_views, fern_ip, garden_sh1_v) ran with
+# `git apply reports/experiments/2026-11-28/moments_in_place/adam_in_place.diff` (BYTES_PER_VERTEX 272); the four
+# *_v rows of cpu_2026-11-28_bytes240.json with the diff applied and BYTES_PER_VERTEX = 240 in
 # mi_voldis/fit/schedule.py.
 set -e
 D=${DATA:-../shared/data}
@@ -21,7 +22,7 @@ python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu
   "python scripts/train.py ../shared/data/CAPTURE --out RUN (BYTES_PER_VERTEX 240)" "each alone" \
   statue=runs/statue_v garden=runs/garden_v horns=runs/horns_v fern=runs/fern_v
 python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu_2026-11-28_moments_in_place.json \
-  "python scripts/train.py ... (adam_in_place.py as the optimiser)" "the same plans as the default rows" \
+  "python scripts/train.py ... (adam_in_place.diff applied)" "the same plans as the default rows" \
   fern_moments_in_place=runs/fern_ip garden_sh1_moments_in_place=runs/garden_sh1_v
 python reports/experiments/2026-11-28/ray_bank/bank_memory.py $D/fern $D/statue $D/horns $D/garden $D/lego_200 \
   > reports/experiments/2026-11-28/ray_bank/bank_memory.txt
