@@ -26,3 +26,10 @@ python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu
   fern_moments_in_place=runs/fern_ip garden_sh1_moments_in_place=runs/garden_sh1_v
 python reports/experiments/2026-11-28/ray_bank/bank_memory.py $D/fern $D/statue $D/horns $D/garden $D/lego_200 \
   > reports/experiments/2026-11-28/ray_bank/bank_memory.txt
+# side by side, back to back: the package, then the diff applied (in a worktree)
+/usr/bin/time -v python scripts/train.py $D/fern --out runs/fern_pkg2 > runs/fern_pkg2.log 2>&1
+git apply reports/experiments/2026-11-28/moments_in_place/adam_in_place.diff
+/usr/bin/time -v python scripts/train.py $D/fern --out runs/fern_ip2 > runs/fern_ip2.log 2>&1
+git apply -R reports/experiments/2026-11-28/moments_in_place/adam_in_place.diff
+python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu_2026-11-28_moments_side_by_side.json \
+  "python scripts/train.py ../shared/data/fern --out RUN" "back to back" fern_package=runs/fern_pkg2 fern_in_place=runs/fern_ip2
