@@ -18,9 +18,9 @@ from .activations import inverse_softplus
 from .device import from_numpy
 from .fieldspec import box_transform
 from .grid import packet_width
+from .plugins.radiance_field import COLOR_LAYOUTS, color_channels
 from .transforms import to_scalar_transform
 
-SH_DEGREES = {3: 0, 12: 1, 27: 2}  # colour channels -> spherical-harmonic degree
 BRICK = 8  # vertices along a brick's edge
 
 
@@ -28,7 +28,7 @@ BRICK = 8  # vertices along a brick's edge
 class FieldState:
     layout: bricks.Layout  # the lattice and its allocated bricks
     data: mi.Float         # packed values, (slots * B^3) vertices x width floats, slot 0 the empty brick
-    channels: int          # 1 + colour coefficients (3 (l + 1)^2)
+    channels: int          # 1 + colour coefficients (radiance_field.color_channels)
     to_world: np.ndarray   # unit cube -> scene space (an axis-aligned box)
     density_scale: float = 1.0  # sigma = density_scale * softplus(raw)
 
@@ -42,7 +42,12 @@ class FieldState:
 
     @property
     def sh_degree(self):
-        return SH_DEGREES[self.channels - 1]
+        return COLOR_LAYOUTS[self.channels - 1][0]
+
+    @property
+    def grey(self):
+        """View dependence by one grey coefficient a harmonic (not an RGB triple)."""
+        return COLOR_LAYOUTS[self.channels - 1][1]
 
     @property
     def vertices(self):
@@ -84,11 +89,12 @@ def density_raw_for_alpha(alpha, step, density_scale):
     return float(inverse_softplus(-np.log1p(-alpha) / step / density_scale))
 
 
-def new_field(lo, hi, resolution, sh_degree, density_raw, density_scale, brick=BRICK):
+def new_field(lo, hi, resolution, sh_degree, density_raw, density_scale, brick=BRICK, grey=False):
     """A field over [lo, hi] with ``resolution`` vertices along its longest side, every brick
-    allocated, raw density ``density_raw`` and raw colour 0 everywhere."""
+    allocated, raw density ``density_raw`` and raw colour 0 everywhere (colour of ``sh_degree``, with grey
+    view dependence where ``grey``)."""
     shape = shape_for(lo, hi, resolution)
-    channels = 1 + 3 * (sh_degree + 1) ** 2
+    channels = 1 + color_channels(sh_degree, grey)
     bx, by, bz = bricks.counts(shape, brick)
     layout = bricks.Layout(shape, brick, np.arange(1, bx * by * bz + 1, dtype=np.uint32).reshape(bz, by, bx))
     width = packet_width(channels)
@@ -178,9 +184,13 @@ def _bricks_over(keep, old, shape):
     return out
 
 
-def with_sh_degree(state, degree):
-    """Colour coefficients truncated or zero-extended to ``degree`` (exact: see radiance_field)."""
-    channels = 1 + 3 * (degree + 1) ** 2
+def with_sh_degree(state, degree, grey=False):
+    """Colour coefficients truncated or zero-extended to ``degree`` (exact: see radiance_field), with grey
+    view dependence where ``grey``. Grey and RGB harmonics are not each other's truncations: between them
+    only through degree 0."""
+    if min(degree, state.sh_degree) > 0 and grey != state.grey:
+        raise ValueError("with_sh_degree: grey and RGB view dependence convert only through degree 0")
+    channels = 1 + color_channels(degree, grey)
     width, old = packet_width(channels), state.width
     idx = dr.arange(mi.UInt32, state.vertices)
     data = dr.zeros(mi.Float, state.vertices * width)

@@ -68,6 +68,25 @@ def test_resampling_to_a_finer_lattice_keeps_the_field():
         np.testing.assert_allclose(np.array(x), np.array(y), atol=2e-5)
 
 
+@pytest.mark.parametrize("grey", [False, True])
+def test_raising_the_degree_and_back_is_exact(grey):
+    """Degree 0 -> 1 (RGB or grey harmonics) appends zero coefficients, which render the same colours, and
+    back to 0 gives the same values bit for bit; grey and RGB harmonics do not convert into each other."""
+    values = random_values((9, 9, 9), seed=5)
+    layout, data = bricks.from_dense(values, 4)
+    state = field_state.FieldState(layout, mi.Float(data), 4, UNIT_BOX)
+    raised = field_state.with_sh_degree(state, 1, grey)
+    assert (raised.sh_degree, raised.grey, raised.width) == (1, grey, 8 if grey else 16)
+    np.testing.assert_array_equal(np.array(field_state.with_sh_degree(raised, 0).data), np.array(state.data))
+    p = mi.Point3f(*np.random.default_rng(6).uniform(0, 1, (3, 300)))
+    d = dr.normalize(mi.Vector3f(*np.random.default_rng(7).normal(size=(3, 300))))
+    low, high = (mi.load_dict(s.plugin()).eval_local(p, d) for s in (state, raised))
+    for x, y in zip(low, high):
+        np.testing.assert_array_equal(np.array(x), np.array(y))
+    with pytest.raises(ValueError, match="through degree 0"):
+        field_state.with_sh_degree(raised, 1, not grey)
+
+
 def test_carving_keeps_needed_bricks_and_a_margin():
     layout, data = bricks.from_dense(random_values((24, 24, 24), seed=5), 4)
     state = field_state.FieldState(layout, mi.Float(data), 4, UNIT_BOX)

@@ -57,6 +57,26 @@ def test_spherical_harmonics_view_dependence_and_promotion():
     np.testing.assert_allclose(got, 1 / (1 + np.exp(-logit)), rtol=1e-5)
 
 
+def test_grey_view_dependence_is_rgb_harmonics_with_equal_channels():
+    """6 colour channels: an RGB mean and one coefficient a degree-1 harmonic, which is the 12-channel field
+    whose R, G and B coefficients of each harmonic are equal; its zero extension from degree 0 changes nothing."""
+    rng = np.random.default_rng(2)
+    c0, g = rng.normal(0, 1, (2, 2, 2, 3)), rng.normal(0, 1, (2, 2, 2, 3))
+    grey = load(np.zeros((2, 2, 2, 1)), np.concatenate([c0, g], axis=-1))
+    rgb = load(np.zeros((2, 2, 2, 1)), np.concatenate([c0, np.repeat(g, 3, axis=-1)], axis=-1))
+    flat = load(np.zeros((2, 2, 2, 1)), np.concatenate([c0, np.zeros_like(g)], axis=-1))
+    deg0 = load(np.zeros((2, 2, 2, 1)), c0)
+    assert (grey.sh_degree, grey.grey, rgb.grey) == (1, True, False)
+    p = mi.Point3f(rng.uniform(0, 1, (3, 50)))
+    for d in ([0, 0, 1], [1, 0, 0], [0.6, -0.8, 0], [-0.36, 0.48, 0.8]):
+        d = mi.Vector3f(d)
+        np.testing.assert_allclose(np.array(grey.eval_local(p, d)[1]), np.array(rgb.eval_local(p, d)[1]), atol=1e-6)
+        np.testing.assert_allclose(np.array(flat.eval_local(p, d)[1]), np.array(deg0.eval_local(p, d)[1]), atol=1e-6)
+    a = np.array(grey.eval_local(p, mi.Vector3f(0, 0, 1))[1])
+    b = np.array(grey.eval_local(p, mi.Vector3f(0, 0, -1))[1])
+    assert np.abs(a - b).max() > 1e-2
+
+
 def test_box_transform_places_the_grid():
     field = load(np.full((2, 2, 2, 1), 1.0), np.zeros((2, 2, 2, 3)), box_transform([1, 2, 3], [3, 6, 4]))
     local = field.world_to_local @ np.array([2.0, 4.0, 3.5, 1.0])
@@ -73,7 +93,7 @@ def test_traverse_update_repacks():
     np.testing.assert_allclose(np.array(sigma), [np.logaddexp(0, 2.0)], rtol=1e-6)
     np.testing.assert_allclose(np.array(color).ravel(), [0.5, 0.5, 0.5])
     params["color"] = mi.TensorXf(np.zeros((2, 2, 2, 5), np.float32))
-    with pytest.raises(ValueError, match="3, 12 or 27 channels"):
+    with pytest.raises(ValueError, match="3, 6, 12 or 27 channels"):
         params.update()
 
 

@@ -55,6 +55,25 @@ def test_scene_xml_renders_the_fitted_fields(tiny_run):
     assert channels["R"].shape == ds.size and np.isfinite(channels["full.R"]).all()
 
 
+def test_grey_view_dependence_fits_saves_and_renders_from_its_scene_xml(tiny_dataset, tmp_path):
+    """``sh_color=grey`` at degree 1: 7 channels a vertex in packets of 8 in the run's grids, recorded in
+    metrics.json, and scene.xml renders what the metrics were computed on."""
+    from mi_voldis.data import load_dataset
+    from mi_voldis.metrics import psnr
+    out = tmp_path / "grey"
+    sets = [s for s in TINY_FIT if not s.startswith("sh_degree")] + ["sh_degree=1", "sh_color=\"grey\""]
+    subprocess.run(train_args(tiny_dataset, out, sets), check=True, capture_output=True)
+    m = json.load(open(out / "metrics.json"))
+    assert (m["sh_degree"], m["sh_color"]) == (1, "grey")
+    grid = np.load(out / "full_grid.npz")
+    assert grid["data"].shape[-1] == 7  # density, the mean's RGB, one coefficient for each of Y_1^-1,0,1
+    assert np.abs(grid["data"][:, 4:]).max() > 0  # the view-dependent coefficients were fitted
+    scene = mi.load_file(str(out / "scene.xml"))
+    ds = load_dataset(str(tiny_dataset))
+    direct = render_camera(scene.integrator(), ds.cameras[ds.test[0]], ("full",))["full"][0]
+    assert abs(psnr(np.clip(direct, 0, 1), ds.images[ds.test[0]]) - m["per_view"][0]["psnr"]) < 1e-3
+
+
 def test_peak_rss_follows_this_process_not_its_parent():
     from mi_voldis.io.run_folder import peak_rss_mib
     code = ("import numpy as np; from mi_voldis.io.run_folder import peak_rss_mib; a = np.ones(50_000_000); "

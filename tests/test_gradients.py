@@ -25,7 +25,7 @@ def weighted_loss(integ, layers, seed=0, samples=None):
     return loss
 
 
-@pytest.mark.parametrize("channels", [3, 12])
+@pytest.mark.parametrize("channels", [3, 6, 12])
 @pytest.mark.parametrize("rule", ["paper", "c4", "density"])
 def test_render_rays_gradients(channels, rule):
     integ = integrator(random_field(1, channels=channels), random_field(2, channels=channels, scale=0.5),

@@ -111,7 +111,7 @@ def test_bad_vol_files_name_the_file(tmp_path):
 
 @pytest.mark.parametrize("props, message", [
     ({"density": np.zeros((2, 2, 2, 2))}, "density must have shape"),
-    ({"color": np.zeros((2, 2, 2, 4))}, "color needs 3, 12 or 27 channels"),
+    ({"color": np.zeros((2, 2, 2, 4))}, "color needs 3, 6, 12 or 27 channels"),
     ({"color": np.zeros((3, 2, 2, 3))}, "color must have shape"),
     ({"density": np.full((2, 2, 2, 1), np.nan)}, "NaN or Inf"),
     ({"density": np.zeros((1, 2, 2, 1)), "color": np.zeros((1, 2, 2, 3))}, "at least 2 vertices"),

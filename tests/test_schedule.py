@@ -69,11 +69,11 @@ def test_affordable_resolution_ends_min_observations_rays_in_every_surface_cell_
         SURVEY["surface_cells"] * ((few + 16) / 64) ** 2
 
 
-def memory_at(res, cells=SURVEY["surface_cells"], pixels=PIXELS, degree=0):
+def memory_at(res, cells=SURVEY["surface_cells"], pixels=PIXELS, degree=0, grey=False):
     """The plan's estimate of a fit's peak bytes at ``res``, written out from its constants."""
     from mi_voldis.fit.schedule import BASE_BYTES, BYTES_PER_PIXEL, BYTES_PER_VERTEX, VERTICES_PER_SURFACE_CELL
     vertices = min(cells * (res / 64) ** 2 * VERTICES_PER_SURFACE_CELL, res ** 3)  # at most the dense lattice
-    per_vertex = BYTES_PER_VERTEX * (4.0 if degree == 1 else 1.0)
+    per_vertex = BYTES_PER_VERTEX * ((2.0 if grey else 4.0) if degree == 1 else 1.0)
     return BASE_BYTES + BYTES_PER_PIXEL * pixels + vertices * per_vertex
 
 
@@ -511,12 +511,17 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     from mi_voldis.fit.schedule import memory_resolution, memory_scale, resolution_bounds
     from mi_voldis.fit.train import cap_for_sh_degree
     assert memory_scale(0) == memory_scale("auto") == 1.0 and memory_scale(1) == 4.0  # 16 floats a vertex, not 4
+    assert memory_scale(1, grey=True) == 2.0 and memory_scale(0, grey=True) == 1.0  # grey: 7 floats in 8
     cfg = FitConfig().for_backend("llvm")
     cells = 2000.0  # at 64^3
     r0, r1 = (memory_resolution(cfg, cells, 64, 64, d, PIXELS) for d in (0, 1))
     for r, d in ((r0, 0), (r1, 1)):
         assert memory_at(r, cells, degree=d) <= cfg.max_memory_gib * 2 ** 30 < memory_at(r + 16, cells, degree=d)
     assert 64 < r1 < r0
+    rg = memory_resolution(cfg.replace(sh_color="grey"), cells, 64, 64, 1, PIXELS)
+    assert memory_at(rg, cells, degree=1, grey=True) <= cfg.max_memory_gib * 2 ** 30 < memory_at(rg + 16, cells,
+                                                                                              degree=1, grey=True)
+    assert r1 < rg < r0
     survey = dict(SURVEY, surface_cells=cells)
     assert resolution_bounds(cfg.replace(sh_degree=1), StepCost(1e-6, 64), 1e6, survey, PIXELS)["memory"] == r1
     # 'auto' picks degree 1 after a plan made at degree 0: the finer stages take the degree-1 bound

@@ -57,7 +57,8 @@ def init_fields(inputs, state, roles, sh_degree):
     scale = 1.0 / cell_size(state.lo, state.hi, finest_resolution(cfg))
     raw = density_raw_for_alpha(cfg.density_init_alpha, step, scale)
     for r in roles:
-        state.fields[r] = new_field(state.lo, state.hi, res, sh_degree, raw, scale, cfg.brick)
+        state.fields[r] = new_field(state.lo, state.hi, res, sh_degree, raw, scale, cfg.brick,
+                                    grey=cfg.sh_color == "grey")
 
 
 def refine(inputs, state, integrator, roles, resolution, max_vertices=None, max_samples=None):
@@ -138,9 +139,7 @@ def memory_bound(inputs, state):
     cfg = inputs.cfg
     if cfg.resolution != "auto" or cfg.resolution_schedule or not (state.plan or {}).get("surface_cells"):
         return None
-    channels = max(f.channels for f in state.fields.values())
-    degree = 0 if channels <= 4 else 1
-    return affordable_vertices(cfg, inputs.bank.pixels, degree)
+    return affordable_vertices(cfg, inputs.bank.pixels, max(f.sh_degree for f in state.fields.values()))
 
 
 def refits_background(inputs):

@@ -248,21 +248,23 @@ BYTES_PER_VERTEX = 272
 VERTICES_PER_SURFACE_CELL = 64
 
 
-def memory_scale(sh_degree):
-    """How much more memory a vertex takes at colour ``sh_degree`` (0, 1 or 'auto', which starts at 0) than
-    BYTES_PER_VERTEX, measured at degree 0: its packed floats over degree 0's (4; degree 1: 16). Measured on
+def memory_scale(sh_degree, grey=False):
+    """How much more memory a vertex takes at colour ``sh_degree`` (0, 1 or 'auto', which starts at 0; grey
+    view dependence where ``grey``) than BYTES_PER_VERTEX, measured at degree 0: its packed floats over degree
+    0's (4; degree 1: 16, 8 grey). Measured on
     fern: 7.0 GiB of peak RSS at degree 1 and 336^3 against 1.7 GiB at degree 0 and 304^3, 3.3 times as much
     per vertex (reports/notes.md)."""
     from ..grid import packet_width
+    from ..plugins.radiance_field import color_channels
     degree = 0 if sh_degree == "auto" else int(sh_degree)
-    return packet_width(1 + 3 * (degree + 1) ** 2) / packet_width(4)
+    return packet_width(1 + color_channels(degree, grey)) / packet_width(4)
 
 
 def affordable_vertices(cfg, pixels, sh_degree):
     """Stored vertices a fit can hold within ``max_memory_gib``: what the base of ``pixels`` training pixels
-    leaves, at BYTES_PER_VERTEX memory_scale(``sh_degree``) bytes each (0 when nothing is left)."""
+    leaves, at BYTES_PER_VERTEX memory_scale(``sh_degree``, ``sh_color``) bytes each (0 when nothing is left)."""
     free = cfg.max_memory_gib * 2 ** 30 - BASE_BYTES - BYTES_PER_PIXEL * pixels
-    return max(0.0, free / (BYTES_PER_VERTEX * memory_scale(sh_degree)))
+    return max(0.0, free / (BYTES_PER_VERTEX * memory_scale(sh_degree, cfg.sh_color == "grey")))
 
 
 def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree, pixels):

@@ -18,6 +18,7 @@ def choose_sh_degree(inputs, state, roles):
     scratch at degree 0 and at degree 1 on most training views, and the two are compared on the
     others (every 4th training view, unseen by both colour fits)."""
     cfg, ds = inputs.cfg, inputs.ds
+    grey = cfg.sh_color == "grey"
     train = np.asarray(ds.train)
     val, fit = train[::4], np.setdiff1d(train, train[::4])
     if len(fit) == 0:  # one training view: nothing to validate view dependence on
@@ -30,7 +31,7 @@ def choose_sh_degree(inputs, state, roles):
     scores = {}
     for degree in (0, 1):
         for r in roles:
-            trial = with_sh_degree(kept[r], degree)
+            trial = with_sh_degree(kept[r], degree, grey)
             i = dr.arange(mi.UInt32, dr.width(trial.data))
             channel, empty = i % trial.width, i < trial.layout.vertices_per_brick * trial.width
             colour = (channel > 0) & (channel < trial.channels) & ~empty  # colour fitted from scratch
@@ -47,7 +48,7 @@ def choose_sh_degree(inputs, state, roles):
                                              ds.images[v]) for v in val]))
     degree = int(scores[1] - scores[0] >= cfg.sh_gain_db)
     for r in roles:  # keep the main fit's colour, at the chosen degree
-        state.fields[r] = with_sh_degree(kept[r], degree)
+        state.fields[r] = with_sh_degree(kept[r], degree, grey)
     state.sh_choice = {"val_psnr_degree0": scores[0], "val_psnr_degree1": scores[1], "degree": degree,
                        "val_views": val.tolist()}
     return degree

@@ -14,8 +14,17 @@ from ..transforms import to_matrix
 
 __variant__ = mi.variant()
 
-SH_DEGREES = {3: 0, 12: 1, 27: 2}  # colour channels -> spherical-harmonic degree
+# colour channels -> (spherical-harmonic degree, grey): RGB; degree 1 with one grey coefficient a harmonic;
+# degree 1 / 2 with an RGB triple a harmonic
+COLOR_LAYOUTS = {3: (0, False), 6: (1, True), 12: (1, False), 27: (2, False)}
 SH_Y0 = 0.28209479177387814  # Y_0^0 = 1 / (2 sqrt(pi))
+
+
+def color_channels(degree, grey=False):
+    """Raw colour channels of a field at spherical-harmonic ``degree``: an RGB triple for the mean colour and,
+    for every higher harmonic, one grey coefficient (``grey``) or an RGB triple."""
+    harmonics = (degree + 1) ** 2
+    return 3 + (harmonics - 1) * (1 if grey else 3)
 
 
 def _unpacked_tensor(slot, doc):
@@ -47,8 +56,10 @@ class RadianceField(mi.Medium):
 
      * - color
        - |string|, |tensor| or |volumegrid|
-       - Raw colour at the same vertices: 3 channels (RGB), or 12 / 27 channels for spherical
-         harmonics of degree 1 / 2, ordered basis-major (channel 3 k + rgb). (Required)
+       - Raw colour at the same vertices: 3 channels (RGB); 12 / 27 channels for spherical
+         harmonics of degree 1 / 2, ordered basis-major (channel 3 k + rgb); or 6 channels for degree 1
+         with grey view dependence (RGB of the mean, then one coefficient for each of Y_1^-1, Y_1^0,
+         Y_1^1, added to R, G and B alike). (Required)
        - |exposed|, |differentiable|
 
      * - grid
@@ -82,7 +93,9 @@ class RadianceField(mi.Medium):
     the direction of travel. softplus keeps a gradient everywhere (no dead cells at initialisation);
     densities are per unit of world length. Outside the box the density is 0. Dividing by Y_0 makes
     C_0 the logit of the mean colour at every degree, so raising a field's degree by appending zero
-    coefficients does not change it.
+    coefficients does not change it. With grey view dependence (6 colour channels) every C_k, k >= 1,
+    is one scalar added to all three logits: a gloss that brightens or darkens a surface with the view
+    (a varnished top that mirrors the sky) at half a degree-1 vertex's memory (8 floats against 16).
 
     The grid's vertex (i, j, k) sits at local position (i/(X-1), j/(Y-1), k/(Z-1)); the tensors are
     ``mi.VolumeGrid``-ordered (Z, Y, X, C). The ``voldis`` integrator evaluates this medium; Mitsuba's
@@ -165,10 +178,10 @@ class RadianceField(mi.Medium):
         self._packed = None  # packed on first use: a step that sets both tensors packs them once
 
     def _check_channels(self, colour):
-        if colour not in SH_DEGREES:
-            raise ValueError(f"radiance_field: color needs 3, 12 or 27 channels (RGB or SH degree 1/2), "
-                             f"got {colour}")
-        self.sh_degree = SH_DEGREES[colour]
+        if colour not in COLOR_LAYOUTS:
+            raise ValueError(f"radiance_field: color needs 3, 6, 12 or 27 channels (RGB, SH degree 1 grey, "
+                             f"SH degree 1/2), got {colour}")
+        self.sh_degree, self.grey = COLOR_LAYOUTS[colour]
 
     # ------------------------------------------------------------ values: tensors or packed
     density = _unpacked_tensor("_density", "Raw density tensor (Z, Y, X, 1).")
@@ -266,10 +279,16 @@ class RadianceField(mi.Medium):
         logits = [v[1], v[2], v[3]]
         if self.sh_degree > 0:
             basis = dr.sh_eval(dr.normalize(d), self.sh_degree)
-            for k in range(1, len(basis)):
-                scale = basis[k] * (1.0 / SH_Y0)
-                for ch in range(3):
-                    logits[ch] = dr.fma(scale, v[1 + 3 * k + ch], logits[ch])
+            if self.grey:  # one coefficient a harmonic, the same for R, G and B
+                gloss = mi.Float(0.0)
+                for k in range(1, len(basis)):
+                    gloss = dr.fma(basis[k] * (1.0 / SH_Y0), v[3 + k], gloss)
+                logits = [c + gloss for c in logits]
+            else:
+                for k in range(1, len(basis)):
+                    scale = basis[k] * (1.0 / SH_Y0)
+                    for ch in range(3):
+                        logits[ch] = dr.fma(scale, v[1 + 3 * k + ch], logits[ch])
         return sigma, mi.Color3f(sigmoid(logits[0]), sigmoid(logits[1]), sigmoid(logits[2]))
 
     # ------------------------------------------------ Mitsuba's path tracers: an empty medium
