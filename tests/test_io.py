@@ -27,9 +27,11 @@ def test_vol_round_trip(tmp_path):
     np.testing.assert_array_equal(hi, [1, 2, 3])
 
 
-def test_field_written_and_read_back_exactly(tmp_path):
-    """A field saved to .vol files and loaded by the plugin has bit-identical tensors and box."""
-    integ = integrator(random_field(1, channels=12), random_field(2))
+@pytest.mark.parametrize("channels", [12, 6])
+def test_field_written_and_read_back_exactly(tmp_path, channels):
+    """A field saved to .vol files and loaded by the plugin has bit-identical tensors and box (RGB and grey
+    degree-1 harmonics)."""
+    integ = integrator(random_field(1, channels=channels), random_field(2))
     full = integ.fields["full"]
     body = save_field(str(tmp_path), "full", np.array(full.density), np.array(full.color), full.to_world)
     body = body.replace('value="full_', f'value="{tmp_path}/full_')

@@ -4,7 +4,8 @@ Format (Mitsuba's binary volume format, version 3): bytes 'VOL', version 3, int3
 float32), int32 X, Y, Z, channels, six float32 for the bounding box (min xyz, max xyz), then the
 data in (Z, Y, X, C) order. Any channel count is allowed by the format; Mitsuba's built-in
 ``gridvolume`` only accepts 1, 3 or 6, so spherical-harmonic colour grids (12 or 27 channels) are
-read by the ``radiance_field`` plugin only.
+read by the ``radiance_field`` plugin only; a grey degree-1 grid (6 channels) loads into ``gridvolume`` too,
+which reads it as two RGB triples, not as view dependence.
 """
 import os
 
