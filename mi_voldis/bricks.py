@@ -141,8 +141,10 @@ def trilinear(data, layout, width, channels, p, active=True):
 
 
 def empty_values(width, channels):
-    """Packed values of one empty vertex: EMPTY_DENSITY, EMPTY_COLOR in the colour channels, 0 padding."""
-    return np.array([EMPTY_DENSITY] + [EMPTY_COLOR] * (channels - 1) + [0.0] * (width - channels), np.float32)
+    """Packed values of one empty vertex: EMPTY_DENSITY, EMPTY_COLOR in the mean colour's channels, 0 in the
+    view-dependent ones (black from every view) and in the padding."""
+    mean = min(channels - 1, 3)
+    return np.array([EMPTY_DENSITY] + [EMPTY_COLOR] * mean + [0.0] * (width - 1 - mean), np.float32)
 
 
 def from_dense(values, brick, keep=None, width=None):

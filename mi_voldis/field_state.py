@@ -203,6 +203,20 @@ def with_sh_degree(state, degree, grey=False):
     return FieldState(state.layout, data, channels, state.to_world, state.density_scale)
 
 
+MEAN_CHANNELS = 4  # density and the mean colour's RGB: every layout's first four channels
+
+
+def without_view_dependence(state, region):
+    """``state`` with the view-dependent coefficients (every channel after the mean colour) of the vertices in
+    ``region`` (Float or Bool per stored vertex) set to 0: there the colour is the mean, from every view."""
+    if state.sh_degree == 0:
+        return state
+    i = dr.arange(mi.UInt32, dr.width(state.data))
+    inside = mi.Bool(dr.gather(mi.Float, mi.Float(region), i // state.width) > 0)
+    data = dr.select(inside & (i % state.width >= MEAN_CHANNELS), 0.0, state.data)
+    return FieldState(state.layout, data, state.channels, state.to_world, state.density_scale)
+
+
 def neighbour_vertices(state, evaluate=True):
     """For every stored vertex, the stored vertex index of its 6 axis neighbours (-x, +x, -y, +y, -z,
     +z) as UInt32 arrays; a vertex at the lattice border, of the empty brick or beyond the lattice is

@@ -87,6 +87,31 @@ def test_raising_the_degree_and_back_is_exact(grey):
         field_state.with_sh_degree(raised, 1, not grey)
 
 
+@pytest.mark.parametrize("grey", [False, True])
+def test_view_dependence_cleared_in_a_region_and_black_from_every_view_when_empty(grey):
+    """``without_view_dependence`` zeroes the coefficients after the mean colour at the region's vertices
+    alone; an empty vertex is black from every direction (its view-dependent coefficients are 0)."""
+    values = random_values((9, 9, 9), seed=8)
+    layout, data = bricks.from_dense(values, 4)
+    field = field_state.with_sh_degree(field_state.FieldState(layout, mi.Float(data), 4, UNIT_BOX), 1, grey)
+    n = field.vertices
+    field = field_state.FieldState(field.layout, mi.Float(np.random.default_rng(9).normal(
+        size=n * field.width).astype(np.float32)), field.channels, UNIT_BOX)
+    region = np.random.default_rng(10).random(n) < 0.3
+    out = np.array(field_state.without_view_dependence(field, mi.Bool(region)).data).reshape(n, field.width)
+    before = np.array(field.data).reshape(n, field.width)
+    assert (out[region, 4:] == 0).all()
+    np.testing.assert_array_equal(out[region, :4], before[region, :4])
+    np.testing.assert_array_equal(out[~region], before[~region])
+    empty = bricks.empty_values(field.width, field.channels)
+    assert empty[0] == bricks.EMPTY_DENSITY and (empty[1:4] == bricks.EMPTY_COLOR).all() and (empty[4:] == 0).all()
+    vertex = mi.load_dict(field_state.FieldState(layout, mi.Float(np.tile(empty, layout.slots * 64)),
+                                                 field.channels, UNIT_BOX).plugin())
+    d = dr.normalize(mi.Vector3f(*np.random.default_rng(11).normal(size=(3, 100))))
+    colour = np.array(vertex.eval_local(mi.Point3f(0.5, 0.5, 0.5), d)[1])
+    assert colour.max() < 1e-4  # sigmoid(-10): black, whatever the direction
+
+
 def test_carving_keeps_needed_bricks_and_a_margin():
     layout, data = bricks.from_dense(random_values((24, 24, 24), seed=5), 4)
     state = field_state.FieldState(layout, mi.Float(data), 4, UNIT_BOX)

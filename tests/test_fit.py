@@ -68,6 +68,13 @@ def test_grey_view_dependence_fits_saves_and_renders_from_its_scene_xml(tiny_dat
     grid = np.load(out / "full_grid.npz")
     assert grid["data"].shape[-1] == 7  # density, the mean's RGB, one coefficient for each of Y_1^-1,0,1
     assert np.abs(grid["data"][:, 4:]).max() > 0  # the view-dependent coefficients were fitted
+    # the background refits its hole at its mean colour: where it differs from the full field (its hull),
+    # no view dependence (nor where it was cleared as empty)
+    bg = np.load(out / "bg_grid.npz")
+    assert (bg["table"] == grid["table"]).all()
+    refit = np.any(bg["data"][:, :4] != grid["data"][:, :4], axis=1)
+    assert refit.any() and (bg["data"][refit, 4:] == 0).all()
+    assert np.abs(bg["data"][~refit, 4:]).max() > 0  # outside it the full field's view dependence stays
     scene = mi.load_file(str(out / "scene.xml"))
     ds = load_dataset(str(tiny_dataset))
     direct = render_camera(scene.integrator(), ds.cameras[ds.test[0]], ("full",))["full"][0]

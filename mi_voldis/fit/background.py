@@ -11,12 +11,14 @@ from ..bricks import EMPTY_COLOR, EMPTY_DENSITY
 from ..cameras import pixel_rays
 from ..device import from_numpy
 from ..field_state import (
+    MEAN_CHANNELS,
     FieldState,
     density_raw_for_alpha,
     dilate_vertices,
     neighbour_vertices,
     resample,
     vertex_positions,
+    without_view_dependence,
 )
 from ..metrics import dilate
 from ..render import march
@@ -58,7 +60,7 @@ def start_cleared(inputs, state):
     carved = object_ray_keys(inputs, full, [v for v in depth if v in set(inputs.ds.masked_train)], depth)
     hull, state.hull_points = hull_region(inputs, full, neighbour_vertices(full))
     region = never_seen(inputs, full, hull > 0, depth) | keys_mask(full, carved)
-    state.fields["bg"] = emptied(inputs, state, full, region)
+    state.fields["bg"] = without_view_dependence(emptied(inputs, state, full, region), hull)
     return carved
 
 
@@ -157,7 +159,9 @@ def start_harmonic(inputs, state, depths=None):
               else harmonic_fill(full.data, full.width, region, neighbours))
     # the object itself: empty, its colour the fill's (:func:`emptied`)
     filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
-    state.fields["bg"] = emptied(inputs, state, filled, obj)
+    # the hole's colour is the mean: the 2D prior that paints it disagrees between views, and view dependence
+    # fitted to that would show each view its own inpainting (refit_elements keeps it 0)
+    state.fields["bg"] = without_view_dependence(emptied(inputs, state, filled, obj), hull)
     if solid is not None:  # the hidden surface: opaque from the filled depth on (hole_shell)
         state.fields["bg"] = with_opacity(inputs, state, state.fields["bg"], solid & ~obj, SOLID_ALPHA)
     state.hull_points = points
@@ -305,9 +309,9 @@ def effect_cells(inputs, state):
 
 
 def clear_empty_background_color(inputs, state, region=None):
-    """Set background colour to black at vertices that no visible background sample reads: those
-    whose voxel opacity is below ``empty_color_alpha`` and whose neighbours (which share trilinear
-    cells with them) are all below it too; inside ``region`` (Bool per stored vertex: the cleared
+    """Set background colour to black (from every view: no view-dependent term) at vertices that no visible
+    background sample reads: those whose voxel opacity is below ``empty_color_alpha`` and whose neighbours
+    (which share trilinear cells with them) are all below it too; inside ``region`` (Bool per stored vertex: the cleared
     hull) their density is emptied as well, so that the faint black left there does not add up to a
     smudge along the rays that cross it. Returns the fraction of stored vertices cleared."""
     bg = state.fields["bg"]
@@ -316,7 +320,8 @@ def clear_empty_background_color(inputs, state, region=None):
     empty = ~dilate_vertices(raw >= threshold, neighbour_vertices(bg))
     channel = dr.arange(mi.UInt32, dr.width(bg.data)) % bg.width
     vertex_empty = dr.repeat(empty, bg.width)
-    values = dr.select(vertex_empty & (channel > 0) & (channel < bg.channels), EMPTY_COLOR, bg.data)
+    values = dr.select(vertex_empty & (channel > 0) & (channel < MEAN_CHANNELS), EMPTY_COLOR, bg.data)
+    values = dr.select(vertex_empty & (channel >= MEAN_CHANNELS), 0.0, values)
     if region is not None:
         values = dr.select(vertex_empty & dr.repeat(region, bg.width) & (channel == 0), EMPTY_DENSITY, values)
     state.fields["bg"] = FieldState(bg.layout, values, bg.channels, bg.to_world, bg.density_scale)

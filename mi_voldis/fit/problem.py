@@ -9,7 +9,7 @@ import numpy as np
 from .. import exposure
 from ..data.scene_box import rig_extent
 from ..device import from_numpy
-from ..field_state import neighbour_vertices
+from ..field_state import MEAN_CHANNELS, neighbour_vertices
 from ..losses import background_loss, distortion_loss, full_loss
 from ..optim.parameters import PackedParameters
 from ..regularizers import add_tv_gradient, sparsity_gradient, tv_gradient
@@ -96,16 +96,17 @@ class FieldFit:
             self.update_occupancy()
 
     def refit_elements(self, field):
-        """The packed elements of ``field`` a refit masked to ``hull`` may change (UInt32, ascending): every
-        slot of the vertices where ``hull`` is not 0, but the empty brick's (slot 0, which stands for every
-        unallocated brick). Elsewhere the masked gradient is zero, so Adam would never move them. Empty
-        where the hull is."""
+        """The packed elements of ``field`` a refit masked to ``hull`` may change (UInt32, ascending): density
+        and the mean colour of the vertices where ``hull`` is not 0, but the empty brick's (slot 0, which
+        stands for every unallocated brick). Elsewhere the masked gradient is zero, so Adam would never move
+        them; the view-dependent coefficients stay as the background's start left them (0 in the hull:
+        :func:`~mi_voldis.field_state.without_view_dependence`). Empty where the hull is."""
         inside = (self.hull != 0.0) & (dr.arange(mi.UInt32, dr.width(self.hull)) >= field.layout.vertices_per_brick)
         vertices = dr.compress(inside)
         if dr.width(vertices) == 0:
             return mi.UInt32()
-        return dr.repeat(vertices, field.width) * field.width + dr.tile(dr.arange(mi.UInt32, field.width),
-                                                                         dr.width(vertices))
+        return dr.repeat(vertices, MEAN_CHANNELS) * field.width + dr.tile(dr.arange(mi.UInt32, MEAN_CHANNELS),
+                                                                          dr.width(vertices))
 
     def final_stage(self, role):
         """Whether the field of ``role`` is at the planned schedule's last resolution and ``lr_views_final``
