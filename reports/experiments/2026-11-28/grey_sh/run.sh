@@ -8,13 +8,15 @@ T="/usr/bin/time -v"
 # degree-1 colour with grey harmonics, alone and with garden's near_grad / contract_radius settings
 $T python scripts/train.py $D/garden --out $W/garden_grey_ng1_cr05 --set sh_degree=1 --set sh_color=grey \
     --set near_grad=1 --set contract_radius=0.5 > $W/garden_grey_ng1_cr05.log 2>&1
+$T python scripts/train.py $D/garden --out $W/garden_grey_ng1_cr05_m13 --set sh_degree=1 --set sh_color=grey \
+    --set near_grad=1 --set contract_radius=0.5 --set minutes=13 > $W/garden_grey_ng1_cr05_m13.log 2>&1
 for c in garden statue horns; do
   $T python scripts/train.py $D/$c --out $W/${c}_grey --set sh_degree=1 --set sh_color=grey > $W/${c}_grey.log 2>&1
 done
 python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu_2026-11-28_grey_sh1.json \
   "python scripts/train.py ../shared/data/CAPTURE --out RUN --set sh_degree=1 --set sh_color=grey [--set near_grad=1 --set contract_radius=0.5]" \
   "each alone on the 2 cores" garden_grey=$W/garden_grey garden_grey_ng1_cr05=$W/garden_grey_ng1_cr05 \
-  statue_grey=$W/statue_grey horns_grey=$W/horns_grey
+  statue_grey=$W/statue_grey horns_grey=$W/horns_grey garden_grey_ng1_cr05_m13=$W/garden_grey_ng1_cr05_m13
 # per-view comparison with the RGB rows of cpu_2026-11-28_garden_near_grad_sh1.json (garden_ng1_sh1_cr05, _m8)
 python reports/experiments/2026-11-28/garden_views.py rgb128=$W/garden_ng1_sh1_cr05 grey160=$W/garden_grey_ng1_cr05 \
   rgb176_8g=$W/garden_ng1_sh1_cr05_m8 > reports/experiments/2026-11-28/grey_sh/garden_views.txt
