@@ -24,6 +24,7 @@ from .device import from_numpy
 from .grid import dilate_cells, packet_width
 
 EMPTY_DENSITY = -20.0  # raw density of the empty brick: softplus(-20) = 2e-9
+MEAN_CHANNELS = 4  # density and the mean colour's RGB: every colour layout's first four channels
 EMPTY_COLOR = -10.0    # raw colour of "black" (sigmoid(-10) = 4.5e-5)
 
 
@@ -143,7 +144,7 @@ def trilinear(data, layout, width, channels, p, active=True):
 def empty_values(width, channels):
     """Packed values of one empty vertex: EMPTY_DENSITY, EMPTY_COLOR in the mean colour's channels, 0 in the
     view-dependent ones (black from every view) and in the padding."""
-    mean = min(channels - 1, 3)
+    mean = min(channels, MEAN_CHANNELS) - 1
     return np.array([EMPTY_DENSITY] + [EMPTY_COLOR] * mean + [0.0] * (width - 1 - mean), np.float32)
 
 

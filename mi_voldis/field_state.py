@@ -15,6 +15,7 @@ import numpy as np
 
 from . import bricks
 from .activations import inverse_softplus
+from .bricks import MEAN_CHANNELS
 from .device import from_numpy
 from .fieldspec import box_transform
 from .grid import packet_width
@@ -201,9 +202,6 @@ def with_sh_degree(state, degree, grey=False):
     for c in range(state.channels, channels):  # new coefficients of the empty brick stay empty
         dr.scatter(data, float(empty[c]), dr.arange(mi.UInt32, b3) * width + c)
     return FieldState(state.layout, data, channels, state.to_world, state.density_scale)
-
-
-MEAN_CHANNELS = 4  # density and the mean colour's RGB: every layout's first four channels
 
 
 def without_view_dependence(state, region):
