@@ -1,6 +1,16 @@
 """Image metrics on display-encoded images in [0, 1]: PSNR, SSIM, mask IoU."""
 import numpy as np
 
+# the removed region a removal is scored in: the object's mask dilated by this fraction of the image
+# diagonal (the hole's soft edge counts, as the 2D inpainters' masks are dilated alike). A constant of the
+# protocol, not the fit's ``hull_dilation``: a fit that grows its hull must not change what it is scored on
+SCORE_DILATION = 0.03
+
+
+def score_dilation(size):
+    """Pixels the masks are dilated by for scoring an image of ``size`` (width, height)."""
+    return int(np.ceil(SCORE_DILATION * np.hypot(*size)))
+
 
 def psnr(a, b, mask=None):
     """Peak signal-to-noise ratio in dB (peak 1); over the pixels of ``mask`` when given."""

@@ -974,12 +974,31 @@ def test_the_removal_score_rates_the_foreground_matte_against_the_masks_on_a_cap
     from mi_voldis.fit.fields import fit_integrator
     ds, _, inputs, state = guided_removal(tmp_path, keep_seen=True, keep_seen_gap=0)
     integ = fit_integrator(inputs, state)
-    truth, _ = evaluate(dataclasses.replace(ds, coverage=ds.masks.astype(np.float32)), integ, 0.03)
-    capture, _ = evaluate(dataclasses.replace(ds, backgrounds=None), integ, 0.03)
+    truth, _ = evaluate(dataclasses.replace(ds, coverage=ds.masks.astype(np.float32)), integ)
+    capture, _ = evaluate(dataclasses.replace(ds, backgrounds=None), integ)
     assert capture["volume"]["psnr_mask"] is None and capture["volume"]["consistency_psnr"] is not None
     for key in ("fg_coverage_iou", "fg_matte_iou"):
         assert truth["volume"][key] > 0.8
         assert capture["volume"][key] == pytest.approx(truth["volume"][key], abs=1e-6)
+
+
+def test_the_removal_is_scored_in_the_same_region_whatever_hull_the_fit_grew(tmp_path):
+    """The removal score's region is the protocol's (masks dilated by SCORE_DILATION of the diagonal), not
+    the fit's ``hull_dilation``: a fit that grows its hull is scored on the pixels the default is, and the
+    2D inpainters beside it get the same masks (a larger one would lower their score and lift the margin)."""
+    from mi_voldis.bench.strategies import evaluate
+    from mi_voldis.fit.fields import fit_integrator
+    from mi_voldis.metrics import psnr, score_dilation
+    ds, _, inputs, state = guided_removal(tmp_path, hull_dilation=0.1)
+    dil = score_dilation(ds.size)
+    assert 0 < dil < np.ceil(0.1 * np.hypot(*ds.size))
+    rows, renders = evaluate(ds, fit_integrator(inputs, state))
+    region = {v: dilate(ds.masks[v], dil) for v in ds.test}
+    expected = np.mean([psnr(np.clip(renders[v]["bg"][0], 0, 1), ds.backgrounds[v], region[v]) for v in ds.test])
+    assert rows["volume"]["psnr_mask"] == pytest.approx(expected, abs=1e-9)
+    telea = inpainter("telea")
+    assert rows["telea"]["psnr_mask"] == pytest.approx(np.mean(
+        [psnr(telea(ds.images[v], region[v]), ds.backgrounds[v], region[v]) for v in ds.test]), abs=1e-9)
 
 
 def test_the_hole_shows_a_surface_at_the_hidden_floor_even_where_the_fit_kept_no_bricks(tmp_path):

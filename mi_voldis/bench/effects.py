@@ -61,7 +61,7 @@ def main(argv=None):
     from ..fit.config import FitConfig
     from ..inpaint2d import inpainter
     from ..io.run_folder import write_json
-    from ..metrics import dilate, psnr
+    from ..metrics import dilate, psnr, score_dilation
     from .strategies import main as refit
     with open(os.path.join(run, "config.json")) as f:
         record = json.load(f)["dataset"]
@@ -75,7 +75,7 @@ def main(argv=None):
     strategy = FitConfig().bg_strategy
     refit([run, strategy, os.path.join(out, "without")])
     refit([run, strategy, os.path.join(out, "with"), data])
-    dil = int(np.ceil(FitConfig().hull_dilation * np.hypot(*ds.size)))
+    dil = score_dilation(ds.size)
     tests = [v for v in ds.test if np.isfinite(ds.backgrounds[v]).all()]
     baselines = {}
     for name in ("telea", "ns"):

@@ -3,8 +3,8 @@
 Every family scene is rendered (``make_dataset.py --family K``), fitted once with the default command
 and its background refitted with each row of :data:`STRATEGIES` for its half (:mod:`mi_voldis.bench.strategies`),
 scored as the removal section scores (in-mask PSNR of the background layer against the true
-background on the held-out views, masks dilated by ``hull_dilation``; Telea and Navier-Stokes on each
-held-out view itself beside it). The report judges the default by the check half's worst scene:
+background on the held-out views, masks dilated by :data:`~mi_voldis.metrics.SCORE_DILATION`; Telea and
+Navier-Stokes on each held-out view itself beside it). The report judges the default by the check half's worst scene:
 margin over max(Telea, Navier-Stokes) (target +2 dB), consistency over the best 2D method's (+3 dB),
 coverage IoU (0.9), and the background's haze in the hole against outside it.
 """

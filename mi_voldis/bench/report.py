@@ -376,12 +376,11 @@ def _removal_sheet(run, strategies, path, views=3):
     import json
 
     import imageio.v3 as iio
-    import numpy as np
 
     from ..data import load_dataset
     from ..inpaint2d import inpainter
     from ..io.images import contact_sheet, display_to_uint8, write_png
-    from ..metrics import dilate
+    from ..metrics import dilate, score_dilation
     if not os.path.isfile(os.path.join(run, "config.json")):  # the run is gone: its sheet, if written, stays
         return os.path.basename(path) if os.path.isfile(path) else None
     with open(os.path.join(run, "config.json")) as f:
@@ -392,7 +391,7 @@ def _removal_sheet(run, strategies, path, views=3):
                                        for r in strategies.values())][:views]
     if not tests or ds.masks is None:
         return None
-    dil = int(np.ceil(config["hull_dilation"] * np.hypot(*ds.size)))
+    dil = score_dilation(ds.size)
     rows = [[display_to_uint8(ds.images[v]) for v in tests]]
     if ds.backgrounds is not None:
         rows.append([display_to_uint8(ds.backgrounds[v]) for v in tests])

@@ -10,7 +10,8 @@ code changed since RUN was fitted; the benchmark always refits) (the background 
 config.json), and
 OUT receives ``metrics.json``, the background of each held-out view as PNG and, where the foreground is
 scored, its coverage against the truth (``viewNNN_coverage.png``: :func:`coverage_errors`). Scored on the held-out
-views against the ground-truth background (in-mask = masks dilated by ``hull_dilation``): PSNR inside
+views against the ground-truth background (in-mask = masks dilated by
+:data:`~mi_voldis.metrics.SCORE_DILATION`, whatever the fit's ``hull_dilation``): PSNR inside
 the masks (and there, apart, where some training view sees the background unmasked and where none
 does: :mod:`mi_voldis.bench.visible`) and outside them (beside the full field's outside them), the
 object's residue, the foreground's IoU (its coverage and its EXR matte; on a capture without ground
@@ -81,16 +82,16 @@ def same_settings(run, cfg):
     return recorded == cfg.for_backend(backend()).to_dict()
 
 
-def evaluate(ds, integrator, dilation_fraction, hull_min_views=0.9):
+def evaluate(ds, integrator, hull_min_views=0.9):
     """Per-method rows (the volume's background, then each 2D baseline) and the volume's held-out renders."""
     from ..compositing import composite_channels
     from ..fit.report import background_haze, mean_defined
     from ..inpaint2d import available_baselines, inpainter
-    from ..metrics import dilate, iou, object_residue, psnr
+    from ..metrics import dilate, iou, object_residue, psnr, score_dilation
     from ..render.views import layer_channels, render_camera
     from ..tasks.removal import consistency, consistency_shares
     from .visible import mask_surfaces, seen_pixels, training_surfaces
-    dil = int(np.ceil(dilation_fraction * np.hypot(*ds.size)))
+    dil = score_dilation(ds.size)
     scored = [v for v in ds.test if ds.backgrounds is not None and np.isfinite(ds.backgrounds[v]).all()]
     # without ground truth: the consistency alone, on every held-out view (none without masks either)
     tests = scored or (list(ds.test) if ds.masks is not None else [])
@@ -209,7 +210,7 @@ def main(argv=None):
     integrator = fit_integrator(inputs, state)
     if ds.masks is None:  # a capture without masks: scored with the masks the background was fitted with
         ds = fit_ds
-    rows, renders = evaluate(ds, integrator, cfg.hull_dilation, cfg.hull_min_views)
+    rows, renders = evaluate(ds, integrator, cfg.hull_min_views)
     if not renders:  # nothing to score: previews of the first held-out views all the same
         from ..render.views import render_camera
         renders = {v: render_camera(integrator, ds.cameras[v], ("bg",)) for v in list(ds.test)[:PREVIEWS]}

@@ -7,19 +7,19 @@ import numpy as np
 from ..compositing import composite_channels
 from ..export import previews
 from ..io.images import write_png
-from ..metrics import dilate, iou, psnr, ssim
+from ..metrics import dilate, iou, psnr, score_dilation, ssim
 from ..render.surface import front_weight
 from ..render.views import layer_channels, render_camera
 
 
-def evaluate(ds, integrator, hull_dilation):
+def evaluate(ds, integrator):
     """Metrics on every held-out view, and the rendered layers of each (for previews). Background
-    metrics inside the masks use masks dilated by ``hull_dilation`` of the image diagonal; ``haze`` is
+    metrics inside the masks use masks dilated by :data:`~mi_voldis.metrics.SCORE_DILATION`; ``haze`` is
     the mean share of a ray's weight the full field spends well in front of the surface it shows
     (:func:`~mi_voldis.render.surface.front_weight`), ``bg_haze_mask`` / ``bg_haze_outside`` the
     background's inside the dilated masks and outside them (:func:`background_haze`)."""
     rows, renders = [], {}
-    dil = int(np.ceil(hull_dilation * np.hypot(*ds.size)))
+    dil = score_dilation(ds.size)
     for v in ds.test:
         out = render_camera(integrator, ds.cameras[v], ("composite", "full", "bg", "fg"))
         renders[v] = out

@@ -74,7 +74,7 @@ def write_run(stage, inputs, state, fit_seconds):
     cells = occupancy_resolution(cfg, state) if cfg.occupancy_at_step else 0
     if cells:
         integrator.update_occupancy(cells, occupancy_sigma(cfg, state))
-    summary, rows, renders = evaluate(ds, integrator, cfg.hull_dilation)
+    summary, rows, renders = evaluate(ds, integrator)
     props = scene_properties(inputs, state, occupancy_resolution=cells,
                              occupancy_threshold=float(occupancy_sigma(cfg, state)))
     write_scene(stage, {role: state.fields[role] for role in ("full", "bg")}, props,
