@@ -5,6 +5,8 @@
 Each row renders the run's held-out views with occupancy cells VOXELS_PER_CELL voxels of the full grid
 across (the fit uses 4), the run's threshold otherwise; prints PSNR, evaluated samples a ray and seconds.
 """
+import importlib.util
+import os
 import sys
 import time
 
@@ -12,13 +14,14 @@ import mitsuba as mi
 import numpy as np
 
 mi.set_variant("llvm_ad_rgb")
-import drjit as dr  # noqa: E402
 
-from mi_voldis.cameras import pixel_rays  # noqa: E402
-from mi_voldis.device import from_numpy  # noqa: E402
-from mi_voldis.metrics import psnr  # noqa: E402
-from mi_voldis.render.rays import render_rays  # noqa: E402
 from mi_voldis.tasks.base import FittedRun  # noqa: E402
+
+# one held-out view rendered with its evaluated samples: the helper of 2026-11-27's render_cost.py
+_spec = importlib.util.spec_from_file_location("render_cost", os.path.join(
+    os.path.dirname(os.path.abspath(__file__)), "..", "..", "2026-11-27", "samples", "render_cost.py"))
+render_cost = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(render_cost)
 
 run = FittedRun(sys.argv[1])
 ds = run.dataset
@@ -28,19 +31,7 @@ print("run", sys.argv[1], "grid", res, "occupancy", run.properties.get("occupanc
 
 
 def view(integrator, v):
-    cam = ds.cameras[v]
-    py, px = np.mgrid[0:cam.height, 0:cam.width]
-    o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
-    rgb, ev = [], []
-    with dr.suspend_grad():
-        for s in range(0, len(o), 1 << 17):
-            n = min(1 << 17, len(o) - s)
-            r = render_rays(integrator, from_numpy(mi.Point3f, o[s:s + n]), from_numpy(mi.Vector3f, d[s:s + n]),
-                            dr.full(mi.Float, 0.5, n), ("full",))
-            rgb.append(np.array(r["full"][0]).T)
-            ev.append(np.array(r["evaluated"]))
-    img = np.clip(np.concatenate(rgb).reshape(cam.height, cam.width, 3), 0, 1)
-    return psnr(img, ds.images[v]), np.concatenate(ev), img
+    return render_cost.view(integrator, ds, v)
 
 
 base = None
