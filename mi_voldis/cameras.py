@@ -67,6 +67,25 @@ def look_at(origin, target, up=(0.0, 1.0, 0.0)):
     return m
 
 
+def world_up(cameras, spread=0.1):
+    """The world's up as the cameras suggest it (unit 3-vector). Cameras held level have horizontal
+    +x axes, so up is the direction orthogonal to all of them: the eigenvector of sum x x^T with the
+    least eigenvalue, signed as the mean camera +y. Where the +x axes barely turn (a forward-facing
+    rig: the middle eigenvalue below ``spread`` times the largest) that direction is not determined,
+    and up is the mean +y made orthogonal to the mean +x: the rig's own up, pitched as the rig is."""
+    frames = np.stack([np.asarray(c.to_world, np.float64)[:3, :3] for c in cameras])
+    x, y = frames[:, :, 0], frames[:, :, 1]
+    mean_y = y.mean(0)
+    values, vectors = np.linalg.eigh(x.T @ x)  # ascending
+    if values[1] >= spread * values[2]:
+        up = vectors[:, 0]
+    else:
+        mean_x = x.mean(0) / np.linalg.norm(x.mean(0))
+        up = mean_y - np.dot(mean_y, mean_x) * mean_x
+    up = up / np.linalg.norm(up)
+    return up if np.dot(up, mean_y) >= 0 else -up
+
+
 def film_to_camera(u, v, tan_x, tan_y, offset_x, offset_y):
     """Camera-frame direction (x, y, 1) through film position (u, v) (see the module docstring)."""
     return (0.5 - u - offset_x) * tan_x, (0.5 - v - offset_y) * tan_y

@@ -75,6 +75,47 @@ def test_the_volumetric_harmonic_fill_of_an_empty_region_changes_nothing():
     np.testing.assert_array_equal(np.array(out), np.array(values))
 
 
+def test_the_world_up_is_orthogonal_to_level_cameras_x_axes_and_a_forward_rigs_own_up_otherwise():
+    from mi_voldis.cameras import world_up
+    angle = 0.7  # the world turned about an arbitrary axis: up goes with it
+    axis = np.array([1.0, 2.0, 0.5]) / np.linalg.norm([1.0, 2.0, 0.5])
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    turn = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+    cams = orbit(12, [0.0, 0.2, 0.0], 3.0, [20.0, 50.0], 40.0, 8, 8)  # pitched 20-50 degrees down
+    for c in cams:
+        c.to_world = c.to_world.copy()
+        c.to_world[:3, :] = turn @ c.to_world[:3, :]
+    np.testing.assert_allclose(world_up(cams), turn @ [0.0, 1.0, 0.0], atol=1e-9)
+    # a forward rig: every camera alike, so its +x axes cannot tell up from forward; up is its own +y
+    frame = look_at([0.0, 1.0, 3.0], [0.0, 0.0, 0.0])
+    forward = [Camera(frame.copy(), 50.0, 8, 8) for _ in range(5)]
+    np.testing.assert_allclose(world_up(forward), frame[:3, 1], atol=1e-9)
+
+
+def test_a_fill_along_the_horizontal_continues_a_floor_and_leaves_the_air_above_it_empty():
+    """A floor (raw density 5) at the lowest 3 vertex layers of a field whose other vertices are air
+    (-5), a region through both from the floor's bottom up: filled with the vertical weight 0, every
+    horizontal slice takes its rim's value, so the floor and the air come back exactly; the isotropic fill
+    carries the floor's density upwards into the region's air."""
+    from mi_voldis.field_state import neighbour_vertices
+    from mi_voldis.fit.background import harmonic_fill as fill3d
+    field = new_field(np.zeros(3), np.ones(3), 16, 0, -5.0, 1.0, 4)
+    pts, _ = vertex_positions(field)
+    y = np.rint(pts[:, 1] * 15).astype(int)
+    floor = np.where(y <= 2, 5.0, -5.0)
+    values = from_numpy(mi.Float, np.repeat(floor, field.width).astype(np.float32))
+    ijk = np.rint(pts * 15).astype(int)
+    inner = np.all((ijk[:, [0, 2]] >= 4) & (ijk[:, [0, 2]] <= 11), 1) & (y >= 1) & (y <= 11)
+    region = from_numpy(mi.Float, inner.astype(np.float32))
+    nb = neighbour_vertices(field)
+    flat = np.array(fill3d(values, field.width, region, nb, iterations=600,
+                           weights=[1.0, 1.0, 0.0, 0.0, 1.0, 1.0]))[::field.width]
+    np.testing.assert_allclose(flat, floor, atol=1e-3)
+    iso = np.array(fill3d(values, field.width, region, nb, iterations=600))[::field.width]
+    above = inner & (y == 3)  # air a vertex above the floor
+    assert iso[above].min() > -3.0 and iso[inner & (y == 6)].max() > -4.5
+
+
 def test_the_filled_colour_comes_from_around_the_hull_not_from_the_vertices_views_see_in_it():
     """hull_fill: a hull (a box of vertices) in a field of one colour c and density s, and in it a slab of
     vertices views see (kept: their own density, and the object's tint as colour). The density fill takes
@@ -591,6 +632,24 @@ def guided_removal(tmp_path, shadow=False, effects=True, **settings):
     checkpoint = str(tmp_path / "state.npz")
     state.save(checkpoint, "bg", 0)
     return (ds, full) + fit(ds, checkpoint, cfg, resume=True, progress=False)
+
+
+def test_the_floor_under_the_object_starts_whole_when_the_hull_is_filled_along_the_horizontal(tmp_path):
+    """The sphere on its floor (the floor under it in the full field too, as the truth has it): the
+    guided background's start (no refit step) fills the hull, the floor vertices under the sphere among
+    it. Filled along the horizontal (the cameras' up is +y) they take the floor's raw density 4 from the
+    floor around the hull; the isotropic fill mixes in the air above and leaves a translucent hole."""
+    from mi_voldis.field_state import density_of
+    floors = {}
+    for vertical in (0.0, 1.0):
+        _, _, _, state = guided_removal(tmp_path / str(vertical), steps_bg=0, hull_fill_vertical=vertical)
+        bg = state.fields["bg"]
+        pts, real = vertex_positions(bg)
+        under = real & (np.hypot(pts[:, 0], pts[:, 2]) < 0.25) & (np.abs(pts[:, 1] - FLOOR_Y) < 0.5 * 2.0 / 39)
+        assert under.sum() > 50
+        floors[vertical] = density_of(bg)[under]
+    np.testing.assert_allclose(floors[0.0], 4.0, atol=1e-3)
+    assert np.median(floors[1.0]) < 0.0
 
 
 def test_a_shadow_given_as_effect_masks_leaves_with_the_object_and_the_floor_keeps_its_geometry(tmp_path):

@@ -8,7 +8,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bricks import EMPTY_COLOR, EMPTY_DENSITY
-from ..cameras import pixel_rays
+from ..cameras import pixel_rays, world_up
 from ..device import from_numpy
 from ..field_state import (
     MEAN_CHANNELS,
@@ -136,15 +136,15 @@ def allocate_hidden_surface(inputs, state, depth, stride=2):
 
 
 def start_harmonic(inputs, state, depths=None):
-    """Background = full field with the object's visual hull inpainted from around it: a harmonic
-    extension of density and colour, so surfaces the object hides (the floor under it) continue
-    through the hull, except in the object's own voxels (:func:`background_regions`), whose density
-    is emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view sees.
-    With ``keep_seen`` only the hull voxels no training view sees unmasked, or within ``keep_seen_gap``
-    vertices of the object's, are inpainted; the others keep the full field's values (the fill's
-    boundary; with ``hull_color_fill`` the density's alone, the colour filled from outside the hull:
-    :func:`hull_fill`). Returns the hull, the object's voxels and those inpainted hull voxels
-    (:func:`background_regions`). ``depths``: the full field's median depth maps by view, read and filled
+    """Background = full field with the object's visual hull inpainted from around it: a harmonic extension of density
+    and colour, along the horizontal by default (:func:`fill_weights`), so surfaces the object hides (the floor
+    under it) continue through the hull, except in the object's own voxels (:func:`background_regions`), whose
+    density is emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view
+    sees. With ``keep_seen`` only the hull voxels no training view sees unmasked, or within ``keep_seen_gap``
+    vertices of the object's, are inpainted; the others keep the full field's values (the fill's boundary; with
+    ``hull_color_fill`` the density's alone, the colour filled from outside the hull: :func:`hull_fill`).
+    Returns the hull, the object's voxels and those inpainted hull voxels (:func:`background_regions`).
+    ``depths``: the full field's median depth maps by view, read and filled
     (:func:`~mi_voldis.fit.lift.training_depths`)."""
     if inputs.cfg.hole_carve:  # room for the hidden surface where no training ray ended
         from .lift import training_depths
@@ -155,8 +155,9 @@ def start_harmonic(inputs, state, depths=None):
     neighbours = neighbour_vertices(full)
     hull, points, obj, refill, solid = background_regions(inputs, state, neighbours, with_solid=True, depths=depths)
     region = dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull
-    values = (hull_fill(full.data, full.width, region, hull, neighbours) if inputs.cfg.hull_color_fill
-              else harmonic_fill(full.data, full.width, region, neighbours))
+    weights = fill_weights(inputs, full, points)
+    values = (hull_fill(full.data, full.width, region, hull, neighbours, weights) if inputs.cfg.hull_color_fill
+              else harmonic_fill(full.data, full.width, region, neighbours, weights=weights))
     # the object itself: empty, its colour the fill's (:func:`emptied`)
     filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
     # the hole's colour is the mean: the 2D prior that paints it disagrees between views, and view dependence
@@ -328,7 +329,28 @@ def clear_empty_background_color(inputs, state, region=None):
     return float(dr.mean(mi.Float(empty))[0])
 
 
-def hull_fill(values, width, region, hull, neighbours):
+def fill_weights(inputs, field, points):
+    """The six neighbour weights (-x, +x, -y, +y, -z, +z) of the hull's fill: the diagonal of the
+    conductivity K = I - (1 - v) u u^T in ``field``'s vertex units, u the world's up there
+    (:func:`~mi_voldis.cameras.world_up`, carried through the scene space at the hull's centre
+    ``points``' mean) and v = ``hull_fill_vertical``. At v = 1 the fill is the isotropic Laplace
+    equation; towards 0 it runs along the horizontal alone, so each slice of the hull is filled from
+    its own rim: a floor crossing the hull continues under the object, and the air above it stays air
+    instead of taking a share of the floor's density (a translucent body of the hull's shape)."""
+    v = inputs.cfg.hull_fill_vertical
+    if v == 1.0 or len(points) == 0:
+        return None
+    ds = inputs.ds
+    up = world_up([ds.cameras[i] for i in ds.train])
+    world = inputs.space.to_world_np(points)
+    centre, step = world.mean(0), 1e-3 * max(float(np.ptp(world, 0).max()), 1e-6)  # locally linear there
+    ends = inputs.space.from_world_np(np.stack([centre, centre + step * up]))
+    local = np.linalg.solve(field.to_world[:3, :3], ends[1] - ends[0]) * (np.array(field.shape) - 1)
+    u = local / np.linalg.norm(local)
+    return [float(1.0 - (1.0 - v) * u[axis] ** 2) for axis in range(3) for _ in range(2)]
+
+
+def hull_fill(values, width, region, hull, neighbours, weights=None):
     """Packed ``values`` with those of ``region`` (Float per stored vertex, 1 = fill) replaced by their
     harmonic fill (:func:`harmonic_fill`): the density's from every value around ``region``; the colour's
     (the other channels) from the colour around ``hull`` (Float per stored vertex, ``region`` inside it)
@@ -336,18 +358,20 @@ def hull_fill(values, width, region, hull, neighbours):
     unmasked: beside the object's silhouette they hold its colour (its soft edge, mask edges that mix it
     in), and a fill from them would paint the object's tint and outline into the hole, a ghost the
     refit's 2D prior does not undo."""
-    density = harmonic_fill(values, width, region, neighbours, channels=(0, 1))
-    colour = harmonic_fill(values, width, hull, neighbours, channels=(1, width))
+    density = harmonic_fill(values, width, region, neighbours, channels=(0, 1), weights=weights)
+    colour = harmonic_fill(values, width, hull, neighbours, channels=(1, width), weights=weights)
     channel = dr.arange(mi.UInt32, dr.width(values)) % width
     return dr.select(dr.repeat(region > 0, width) & (channel > 0), colour, density)
 
 
-def harmonic_fill(values, width, region, neighbours, iterations=300, channels=None):
+def harmonic_fill(values, width, region, neighbours, iterations=300, channels=None, weights=None):
     """Packed ``values`` inside ``region`` (Float per stored vertex, 1 = fill) replaced by the harmonic
     extension of the values around them (Jacobi iterations of the 6-neighbour Laplace equation, every
     channel), a smooth volumetric inpainting: surfaces crossing the region continue through it. Only
     the region's values are iterated (compactly); the rest stay as they are. ``channels``: (first,
-    end) of the channels to fill (default all)."""
+    end) of the channels to fill (default all); ``weights``: one per neighbour direction (default
+    equal), the diagonal of an anisotropic conductivity: div(K grad f) = 0, each Jacobi step the
+    weighted mean sum_d k_d f_d / sum_d k_d."""
     n = dr.width(values)
     i = dr.arange(mi.UInt32, n)
     inside = dr.gather(mi.Float, region, i // width) > 0
@@ -367,8 +391,11 @@ def harmonic_fill(values, width, region, neighbours, iterations=300, channels=No
         dirs.append((k < m, k, dr.gather(mi.Float, values, j)))  # (free?, place, fixed value)
     inner = dr.zeros(mi.Float, m)
     dr.eval(dirs, inner)
+    weights = [1.0] * 6 if weights is None else weights
+    total = sum(weights)
     for _ in range(iterations):
-        inner = sum(dr.select(free, dr.gather(mi.Float, inner, k, free), fixed) for free, k, fixed in dirs) / 6.0
+        inner = sum(w * dr.select(free, dr.gather(mi.Float, inner, k, free), fixed)
+                    for w, (free, k, fixed) in zip(weights, dirs) if w > 0) / total
         dr.eval(inner)
     out = dr.copy(values)  # the caller's values stay unchanged
     dr.scatter(out, inner, fill)

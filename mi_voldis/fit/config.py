@@ -56,10 +56,10 @@ def _fractions_error(value):
 class FitConfig(Settings):
     # settings added since runs were first recorded, at the values those runs were fitted with (not a field:
     # no annotation): plans before host_ms had no host term; background refits before bg_lr_* / bg_tv_*
-    # stepped with the then default rates and TV weights
+    # stepped with the then default rates and TV weights, and filled the hull isotropically
     ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
-             "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0}
+             "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -276,6 +276,12 @@ class FitConfig(Settings):
                                            "(those keep their own): beside the object's silhouette these hold the "
                                            "object's tint, and a fill from them paints a ghost of it into the hole "
                                            "(off by default, reports/notes.md; bg_strategy 'harmonic', 'guided')")
+    hull_fill_vertical: float = setting(0.0, "weight of the world's up (from the cameras) in the hull's fill, "
+                                             "against 1 for the horizontal: 0 fills each horizontal slice of the "
+                                             "hull from its own rim, so the floor under the object continues "
+                                             "whole and the floor's density is not carried up into the air above "
+                                             "it; 1 fills isotropically (bg_strategy 'harmonic', 'guided')",
+                                        low=0, high=1)
     keep_seen_gap: int = setting(1, "with keep_seen, hull vertices within this many vertices of the object's own "
                                     "voxels are filled even where a view sees them unmasked: the object's soft "
                                     "edge, which views see beside its silhouette, leaves with it (0: none)",
