@@ -512,7 +512,7 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     from mi_voldis.fit.train import cap_for_sh_degree
     assert memory_scale(0) == memory_scale("auto") == 1.0 and memory_scale(1) == 4.0  # 16 floats a vertex, not 4
     assert memory_scale(1, grey=True) == 2.0 and memory_scale(0, grey=True) == 1.0  # grey: 7 floats in 8
-    cfg = FitConfig().for_backend("llvm")
+    cfg = FitConfig().for_backend("llvm").replace(sh_color="rgb")
     cells = 2000.0  # at 64^3
     r0, r1 = (memory_resolution(cfg, cells, 64, 64, d, PIXELS) for d in (0, 1))
     for r, d in ((r0, 0), (r1, 1)):
@@ -530,16 +530,42 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     def inputs(c):
         return SimpleNamespace(cfg=c, bank=SimpleNamespace(pixels=PIXELS), ds=SimpleNamespace(masks=None))
     state = SimpleNamespace(plan=dict(plan), schedule=[[0, 64], [300, r1 + 32], [500, r0]])
-    cap_for_sh_degree(inputs(cfg), state, 1)
+    cap_for_sh_degree(inputs(cfg), state, 1, 300)
     assert state.schedule == [[0, 64], [300, r1]] and state.plan["sh_memory_cap"] == r1
     kept = [[0, 64], [300, r1]]
     state = SimpleNamespace(plan=dict(plan), schedule=[list(s) for s in kept])
-    cap_for_sh_degree(inputs(cfg), state, 1)  # already within: unchanged, nothing recorded
+    cap_for_sh_degree(inputs(cfg), state, 1, 300)  # already within: unchanged, nothing recorded
     assert state.schedule == kept and "sh_memory_cap" not in state.plan
     state = SimpleNamespace(plan=dict(plan), schedule=[[0, 64], [500, r0]])
-    cap_for_sh_degree(inputs(cfg.replace(resolution=r0)), state, 1)  # a resolution the user gave stays
+    cap_for_sh_degree(inputs(cfg.replace(resolution=r0)), state, 1, 500)  # a resolution the user gave stays
     assert state.schedule == [[0, 64], [500, r0]]
 
+
+
+def test_degree_one_chosen_in_a_default_plan_costs_its_steps_at_degree_one():
+    """A default plan (costed at the reference speed) that 'auto' turns to grey degree-1 colour at step 300:
+    the seconds it gave the steps ahead (at degree 0's cost) buy steps whose kernels cost memory_scale (2)
+    times as much, and the plan's cost says so from then on."""
+    from types import SimpleNamespace
+
+    from mi_voldis.fit.schedule import cost_ahead, memory_scale, plan_cost
+    from mi_voldis.fit.train import cap_for_sh_degree
+    cfg = FitConfig().for_backend("llvm")
+    assert cfg.sh_color == "grey" and memory_scale(1, grey=True) == 2.0
+    plan = {"surface_cells": 10.0, "surface_resolution": 64, "reference_msps": 18.0, "coarse_step_seconds": 0.04,
+            "host_ms": 0.0, "step_voxels": 0.5}
+    schedule, steps = [[0, 64], [300, 128], [600, 192]], 3000
+    state = SimpleNamespace(plan=dict(plan), schedule=[list(s) for s in schedule], steps_full=steps)
+    inputs = SimpleNamespace(cfg=cfg, bank=SimpleNamespace(pixels=PIXELS), ds=SimpleNamespace(masks=None))
+    before = cost_ahead(schedule, steps, 300, plan_cost(plan, 64))
+    cap_for_sh_degree(inputs, state, 1, 300)
+    assert state.plan["kernel_scale"] == 2.0 and "sh_memory_cap" not in state.plan  # 192 is within memory
+    assert state.schedule[:2] == [[0, 64], [300, 128]] and [r for _, r in state.schedule] == [64, 128, 192]
+    assert plan_cost(state.plan, 64).kernels == pytest.approx(2 * plan_cost(plan, 64).kernels)
+    after = cost_ahead(state.schedule, state.steps_full, 300, plan_cost(state.plan, 64))
+    assert after == pytest.approx(before, rel=2e-3)  # the same seconds (to a step's rounding) ...
+    assert state.steps_full - 300 == pytest.approx((steps - 300) / 2, abs=2)  # ... for half the steps
+    assert state.plan["rescaled"] == [[300, state.steps_full]]
 
 def test_a_step_of_more_voxels_costs_the_samples_share_less_on_the_finer_stages():
     """step_factor: the samples' share SAMPLE_SHARE of a half-voxel step scales with 0.5 / step, the rest

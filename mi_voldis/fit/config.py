@@ -165,12 +165,16 @@ class FitConfig(Settings):
                                         above=0, high=0.5)
     sh_degree: int | str = setting("auto", "colour: 0 (RGB), 1 (spherical harmonics), or 'auto': degree 1 only "
                                            "if it pays on validation views", choices=("auto", 0, 1))
-    sh_color: str = setting("rgb", "view-dependent colour at degree 1: 'rgb' (a triple a harmonic) or 'grey' (one "
+    sh_color: str = setting("grey", "view-dependent colour at degree 1: 'rgb' (a triple a harmonic) or 'grey' (one "
                                    "coefficient a harmonic added to R, G and B alike: a gloss that brightens or "
                                    "darkens with the view, at half a degree-1 vertex's memory)",
                             choices=("rgb", "grey"))
-    sh_gain_db: float = setting(2.0, "'auto': validation PSNR that degree 1 must gain over degree 0", low=0)
-    sh_trial_steps: int = setting(100, "'auto': colour-only steps of each degree's trial fit", low=1)
+    sh_gain_db: float = setting(2.0, "'auto': validation PSNR that degree 1 must gain over degree 0 in the trial "
+                                     "fits (mi_voldis.fit.sh_degree); lower (0.25) gives degree 1 to captures whose "
+                                     "colour changes with the view such as garden, but also to removal-family "
+                                     "scenes whose removal then loses (reports/notes.md)", low=0)
+    sh_trial_steps: int = setting(200, "'auto': steps of each degree's trial fit (density and colour, at the end of "
+                                       "the coarse stage)", low=1)
 
     # ---- regularisers (weights on per-vertex means; gradients added directly to the grids)
     tv_density: float = setting(1e-3, "total variation of raw density in the full phase", low=0)

@@ -47,7 +47,7 @@ import numpy as np
 
 COST_EXPONENT = 1.25
 RESERVED = 0.2
-# without a background refit only the spherical-harmonic trials (100 colour-only steps of each degree) and the
+# without a background refit only the spherical-harmonic trials (sh_trial_steps steps of each degree) and the
 # held-out evaluation follow the full phase: a few seconds of a budget of minutes
 RESERVED_NO_BACKGROUND = 0.05
 
@@ -400,9 +400,11 @@ def rescale_after_cap(schedule, steps_full, step, cap, cost, budget):
 def plan_cost(plan, coarse):
     """The :class:`StepCost` a default plan (costed at the reference speed: ``plan`` holds
     ``coarse_step_seconds``, ``host_ms`` and the finer stages' ``step_voxels``, half a voxel in plans
-    made before it was recorded) was made with, its coarse stage at ``coarse``."""
+    made before it was recorded) was made with, its coarse stage at ``coarse``; its kernels times
+    ``kernel_scale`` once degree-1 colour was chosen (:func:`~mi_voldis.fit.train.cap_for_sh_degree`)."""
     host = plan.get("host_ms", 0.0) / 1e3
-    return StepCost(plan["coarse_step_seconds"] - host, coarse, host).marching(plan.get("step_voxels", HALF_VOXEL))
+    kernels = (plan["coarse_step_seconds"] - host) * plan.get("kernel_scale", 1.0)
+    return StepCost(kernels, coarse, host).marching(plan.get("step_voxels", HALF_VOXEL))
 
 
 def capped(schedule, cap, step=0):

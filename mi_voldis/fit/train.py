@@ -77,7 +77,10 @@ from .schedule import (
     capture_survey,
     choose_step,
     coarse_resolution,
+    cost_ahead,
     memory_resolution,
+    memory_scale,
+    plan_cost,
     rescale,
     reserved,
     resolution_bounds,
@@ -246,7 +249,12 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
                  final_ratio=cfg.lr_final_ratio ** (sh_step / state.steps_full), desc="full (coarse)", **common)
         problem.sync_states()
         if choose_sh_degree(inputs, state, roles):
-            cap_for_sh_degree(inputs, state, 1)
+            cap_for_sh_degree(inputs, state, 1, sh_step)
+        c = state.sh_choice
+        if inputs.progress and "val_psnr_degree0" in c:
+            print(f"note: colour of SH degree {c['degree']} (the trial fits' validation views: "
+                  f"{c['val_psnr_degree1'] - c['val_psnr_degree0']:+.2f} dB at degree 1; sh_gain_db "
+                  f"{cfg.sh_gain_db})", file=sys.stderr)
         state.adam.reset()
         problem.rebuild()
         start = sh_step
@@ -264,19 +272,29 @@ def checkpoints(cfg):
     return {"checkpoint_seconds": 60.0 * cfg.checkpoint_minutes}
 
 
-def cap_for_sh_degree(inputs, state, degree):
-    """Degree-1 colour chosen after the plan (``sh_degree`` 'auto'), which was bounded in memory at
-    degree 0: stages finer than the memory bound at ``degree`` (:func:`memory_resolution`) take that
-    bound instead, a stage that would repeat the one before it is dropped, and the plan records the cap."""
+def cap_for_sh_degree(inputs, state, degree, step):
+    """Degree-1 colour chosen at ``step`` after the plan (``sh_degree`` 'auto'), which was bounded in
+    memory and costed at degree 0: stages finer than the memory bound at ``degree``
+    (:func:`memory_resolution`) take that bound instead, a stage that would repeat the one before it is
+    dropped, and the plan records the cap. The default plan (costed at the reference speed) then costs its
+    steps at ``degree``: a step's kernels move vertices of ``memory_scale`` times degree 0's floats, so
+    they cost that much more (``plan['kernel_scale']``, which :func:`plan_cost` applies from then on), and
+    the seconds the plan gave the steps from ``step`` on buy that many fewer."""
     cfg, plan = inputs.cfg, state.plan or {}
     if cfg.resolution != "auto" or "surface_cells" not in plan:
         return
-    cap = memory_resolution(cfg, plan["surface_cells"], plan["surface_resolution"], state.schedule[0][1], degree,
-                            inputs.bank.pixels)
-    if all(r <= cap for _, r in state.schedule):
-        return
-    state.schedule = capped(state.schedule, cap)
-    plan["sh_memory_cap"] = cap
+    coarse = state.schedule[0][1]
+    left = cost_ahead(state.schedule, state.steps_full, step, plan_cost(plan, coarse)) if "reference_msps" in plan \
+        else None
+    cap = memory_resolution(cfg, plan["surface_cells"], plan["surface_resolution"], coarse, degree, inputs.bank.pixels)
+    if any(r > cap for _, r in state.schedule):
+        state.schedule = capped(state.schedule, cap)
+        plan["sh_memory_cap"] = cap
+    if left is not None:
+        plan["kernel_scale"] = memory_scale(degree, cfg.sh_color == "grey")
+        state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, plan_cost(plan, coarse),
+                                                   left)
+        plan.setdefault("rescaled", []).append([step, state.steps_full])
 
 
 def replan(state, step):
