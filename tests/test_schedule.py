@@ -512,7 +512,7 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     from mi_voldis.fit.train import cap_for_sh_degree
     assert memory_scale(0) == memory_scale("auto") == 1.0 and memory_scale(1) == 4.0  # 16 floats a vertex, not 4
     assert memory_scale(1, grey=True) == 2.0 and memory_scale(0, grey=True) == 1.0  # grey: 7 floats in 8
-    cfg = FitConfig().for_backend("llvm").replace(sh_color="rgb")
+    cfg = FitConfig().for_backend("llvm")
     cells = 2000.0  # at 64^3
     r0, r1 = (memory_resolution(cfg, cells, 64, 64, d, PIXELS) for d in (0, 1))
     for r, d in ((r0, 0), (r1, 1)):
@@ -550,8 +550,8 @@ def test_degree_one_chosen_in_a_default_plan_costs_its_steps_at_degree_one():
 
     from mi_voldis.fit.schedule import cost_ahead, memory_scale, plan_cost
     from mi_voldis.fit.train import cap_for_sh_degree
-    cfg = FitConfig().for_backend("llvm")
-    assert cfg.sh_color == "grey" and memory_scale(1, grey=True) == 2.0
+    cfg = FitConfig().for_backend("llvm").replace(sh_color="grey")
+    assert memory_scale(1, grey=True) == 2.0
     plan = {"surface_cells": 10.0, "surface_resolution": 64, "reference_msps": 18.0, "coarse_step_seconds": 0.04,
             "host_ms": 0.0, "step_voxels": 0.5}
     schedule, steps = [[0, 64], [300, 128], [600, 192]], 3000

@@ -46,7 +46,7 @@ def glossy_capture(root, gloss):
 
 SETS = ["steps_full=300", "lr_warmup=2", "batch_rays=1024", "resolution_schedule=[[0,16],[200,20]]",
         "sh_degree=\"auto\"", "sh_trial_steps=80", "sh_gain_db=0.0", "eval_every=1000", "occupancy_at_step=20",
-        "preview_views=0", "steps_bg=2"]
+        "preview_views=0", "steps_bg=2", "sh_color=\"grey\""]
 
 
 @pytest.mark.parametrize("gloss, degree", [((1.5, 1.5, 1.5), 1), ((0.0, 0.0, 0.0), 0)])
@@ -60,6 +60,6 @@ def test_the_trial_fits_give_degree_one_to_colour_that_changes_with_the_view(tmp
     choice = m["sh_choice"]
     gain = choice["val_psnr_degree1"] - choice["val_psnr_degree0"]
     assert (choice["degree"], m["sh_degree"]) == (degree, degree) and (gain > 0) == bool(degree)
-    assert m["sh_color"] == ("grey" if degree else "rgb")  # the layout the fields hold (grey: the default)
+    assert m["sh_color"] == ("grey" if degree else "rgb")  # the layout the fields hold
     train = [k for k in range(VIEWS) if k % 8]  # every 8th view is held out
     assert choice["trial_steps"] == 80 and choice["val_views"] == train[::4]

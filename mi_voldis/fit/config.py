@@ -165,7 +165,7 @@ class FitConfig(Settings):
                                         above=0, high=0.5)
     sh_degree: int | str = setting("auto", "colour: 0 (RGB), 1 (spherical harmonics), or 'auto': degree 1 only "
                                            "if it pays on validation views", choices=("auto", 0, 1))
-    sh_color: str = setting("grey", "view-dependent colour at degree 1: 'rgb' (a triple a harmonic) or 'grey' (one "
+    sh_color: str = setting("rgb", "view-dependent colour at degree 1: 'rgb' (a triple a harmonic) or 'grey' (one "
                                    "coefficient a harmonic added to R, G and B alike: a gloss that brightens or "
                                    "darkens with the view, at half a degree-1 vertex's memory)",
                             choices=("rgb", "grey"))
