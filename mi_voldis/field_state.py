@@ -7,6 +7,7 @@ very array the ``radiance_field`` plugin reads and Adam steps on. Resampling eva
 interpolant of the old grid at the new vertices, so a finer lattice over the same box represents the
 same field; carving keeps only the bricks where some vertex has density (grown by a brick).
 """
+import dataclasses
 from dataclasses import dataclass
 
 import drjit as dr
@@ -32,10 +33,16 @@ class FieldState:
     channels: int          # 1 + colour coefficients (radiance_field.color_channels)
     to_world: np.ndarray   # unit cube -> scene space (an axis-aligned box)
     density_scale: float = 1.0  # sigma = density_scale * softplus(raw)
+    sh_gate: bool = False       # view dependence scaled by a voxel's opacity (radiance_field's sh_gate)
 
     @property
     def shape(self):
         return self.layout.shape
+
+    def with_data(self, data, channels=None):
+        """The same field (lattice, box, activation) over other packed values ``data`` (of ``channels``)."""
+        return dataclasses.replace(self, data=data, channels=self.channels if channels is None else channels,
+                                   to_world=self.to_world.copy())
 
     @property
     def width(self):
@@ -60,7 +67,7 @@ class FieldState:
         return {"type": "radiance_field", "table": mi.TensorXf(self.layout.table.ravel().astype(np.float32)),
                 "data": mi.TensorXf(self.data, (self.vertices, self.width)), "channels": self.channels,
                 "vertices": mi.ScalarVector3f(*self.shape), "brick": self.layout.brick,
-                "density_scale": float(self.density_scale),
+                "density_scale": float(self.density_scale), "sh_gate": bool(self.sh_gate),
                 "to_world": to_scalar_transform(self.to_world)}
 
     def values(self):
@@ -90,10 +97,10 @@ def density_raw_for_alpha(alpha, step, density_scale):
     return float(inverse_softplus(-np.log1p(-alpha) / step / density_scale))
 
 
-def new_field(lo, hi, resolution, sh_degree, density_raw, density_scale, brick=BRICK, grey=False):
+def new_field(lo, hi, resolution, sh_degree, density_raw, density_scale, brick=BRICK, grey=False, sh_gate=False):
     """A field over [lo, hi] with ``resolution`` vertices along its longest side, every brick
     allocated, raw density ``density_raw`` and raw colour 0 everywhere (colour of ``sh_degree``, with grey
-    view dependence where ``grey``)."""
+    view dependence where ``grey``, gated by opacity where ``sh_gate``)."""
     shape = shape_for(lo, hi, resolution)
     channels = 1 + color_channels(sh_degree, grey)
     bx, by, bz = bricks.counts(shape, brick)
@@ -103,7 +110,8 @@ def new_field(lo, hi, resolution, sh_degree, density_raw, density_scale, brick=B
     vertex[0] = density_raw
     values = np.tile(vertex, (layout.slots * brick ** 3, 1))
     values[: brick ** 3] = bricks.empty_values(width, channels)
-    return FieldState(layout, from_numpy(mi.Float, values.ravel()), channels, box_transform(lo, hi), density_scale)
+    return FieldState(layout, from_numpy(mi.Float, values.ravel()), channels, box_transform(lo, hi), density_scale,
+                      sh_gate)
 
 
 def vertex_local(state):
@@ -144,7 +152,7 @@ def resample(state, shape=None, keep=None):
     table = np.zeros(new_keep.shape, np.uint32)
     table[new_keep] = np.arange(1, int(new_keep.sum()) + 1)
     layout = bricks.Layout(shape, old.brick, table)
-    new = FieldState(layout, None, state.channels, state.to_world, state.density_scale)
+    new = dataclasses.replace(state, layout=layout, data=None)
     local, real = vertex_local(new)
     values = bricks.trilinear(dr.detach(state.data), old, state.width, state.channels, local)
     width = state.width
@@ -201,7 +209,7 @@ def with_sh_degree(state, degree, grey=False):
     empty = bricks.empty_values(width, channels)
     for c in range(state.channels, channels):  # new coefficients of the empty brick stay empty
         dr.scatter(data, float(empty[c]), dr.arange(mi.UInt32, b3) * width + c)
-    return FieldState(state.layout, data, channels, state.to_world, state.density_scale)
+    return state.with_data(data, channels)
 
 
 def without_view_dependence(state, region):
@@ -212,7 +220,7 @@ def without_view_dependence(state, region):
     i = dr.arange(mi.UInt32, dr.width(state.data))
     inside = mi.Bool(dr.gather(mi.Float, mi.Float(region), i // state.width) > 0)
     data = dr.select(inside & (i % state.width >= MEAN_CHANNELS), 0.0, state.data)
-    return FieldState(state.layout, data, state.channels, state.to_world, state.density_scale)
+    return state.with_data(data)
 
 
 def neighbour_vertices(state, evaluate=True):

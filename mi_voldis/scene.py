@@ -70,10 +70,10 @@ def save_any_field(folder, role, field):
     layout = getattr(field, "layout", None)
     if layout is None:
         return save_field(folder, role, np.array(field.density), np.array(field.color), field.to_world,
-                          field.density_scale)
+                          field.density_scale, field.sh_gate)
     packed = field.data if hasattr(field, "data") and not hasattr(field, "packed") else field.packed
     values = np.array(packed).reshape(-1, field.width)[layout.vertices_per_brick:, :field.channels]
-    return save_grid(folder, role, layout, values, field.to_world, field.density_scale)
+    return save_grid(folder, role, layout, values, field.to_world, field.density_scale, field.sh_gate)
 
 
 def load_scene(path, need_fields=True):

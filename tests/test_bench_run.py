@@ -57,9 +57,9 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
     dataset = config["dataset"]["path"]
     assert set(FitConfig.ADDED) <= set(config)
     # the settings it was fitted with as a run before them would have been; those whose default has
-    # changed since (hull_fill_vertical) read back as the old value
+    # changed since (hull_fill_vertical, sh_gate) read back as the old value
     changed = {key for key, value in FitConfig.ADDED.items() if config[key] != value}
-    assert changed == {"hull_fill_vertical"}
+    assert changed == {"hull_fill_vertical", "sh_gate"}
     for key in FitConfig.ADDED:
         if key not in changed:
             del config[key]
@@ -67,7 +67,8 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
         json.dump(config, f)
     lacking = tmp_path / "lacking.json"
     lacking.write_text(json.dumps({k: v for k, v in config.items() if k not in changed}))
-    assert FitConfig.from_sources(str(lacking)).hull_fill_vertical == 1.0
+    read = FitConfig.from_sources(str(lacking))
+    assert read.hull_fill_vertical == 1.0 and read.sh_gate is False
     # the host's milliseconds it was planned with: llvm's default, not cuda's (where the suite also runs)
     assert finished(str(old), dataset, TINY_FIT + [f"host_ms={FitConfig.ADDED['host_ms']}"])
     cfg = FitConfig.from_sources(str(old / "config.json"))

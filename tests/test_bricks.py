@@ -87,6 +87,31 @@ def test_raising_the_degree_and_back_is_exact(grey):
         field_state.with_sh_degree(raised, 1, not grey)
 
 
+def test_the_gate_travels_with_the_field_through_edits_checkpoints_and_scene_files(tmp_path):
+    """A field's ``sh_gate`` survives the operations that derive one field from another (degree changes,
+    resampling, new values), a checkpoint and a scene file; a checkpoint or scene written before the gate
+    existed loads ungated."""
+    from mi_voldis.fit.state import FitState
+    from mi_voldis.optim.adam import Adam
+    from mi_voldis.scene import save_any_field
+    values = random_values((9, 9, 9), seed=8)
+    layout, data = bricks.from_dense(values, 4)
+    state = field_state.with_sh_degree(field_state.FieldState(layout, mi.Float(data), 4, UNIT_BOX, 2.0, True), 1, True)
+    derived = [state, field_state.resample(state, (13, 13, 13)), state.with_data(dr.copy(state.data)),
+               field_state.without_view_dependence(state, mi.Float(1.0))]
+    assert all(f.sh_gate and f.density_scale == 2.0 for f in derived)
+    assert mi.load_dict(state.plugin()).sh_gate
+    fit = FitState(np.zeros(3), np.ones(3), Adam({}, 0.9, 0.99), fields={"full": state})
+    fit.save(str(tmp_path / "state.npz"), "full", 0)
+    assert FitState.load(str(tmp_path / "state.npz"), Adam({}, 0.9, 0.99)).fields["full"].sh_gate
+    old = np.load(tmp_path / "state.npz", allow_pickle=False)
+    np.savez(tmp_path / "old.npz", **{k: old[k] for k in old.files if not k.endswith("sh_gate")})
+    assert not FitState.load(str(tmp_path / "old.npz"), Adam({}, 0.9, 0.99)).fields["full"].sh_gate
+    for gate in (True, False):
+        body = save_any_field(str(tmp_path), f"f{gate}", mi.load_dict({**state.plugin(), "sh_gate": gate}))
+        assert ('name="sh_gate"' in body) == gate  # absent where false: files from before the gate read the same
+
+
 @pytest.mark.parametrize("grey", [False, True])
 def test_view_dependence_cleared_in_a_region_and_black_from_every_view_when_empty(grey):
     """``without_view_dependence`` zeroes the coefficients after the mean colour at the region's vertices

@@ -77,6 +77,74 @@ def test_grey_view_dependence_is_rgb_harmonics_with_equal_channels():
     assert np.abs(a - b).max() > 1e-2
 
 
+def gated(density, color, to_world=None, gate=True):
+    return mi.load_dict({**field_dict(density, color, to_world, density_scale=4.0), "sh_gate": gate})
+
+
+@pytest.mark.parametrize("channels", [6, 12])
+def test_gated_view_dependence_follows_a_voxels_opacity(channels):
+    """``sh_gate``: logit = C0 + g sum_k Y_k(d) / Y_0 C_k with g = 1 - exp(-s softplus(D) h), h the voxel edge
+    (here a 3 x 2 x 2 box over 3 x 3 x 3 vertices: h = 1.5): a faint density shows its mean colour from every
+    side, an opaque one the ungated colour, and in between exactly the formula."""
+    rng = np.random.default_rng(3)
+    c = rng.normal(0, 1, (3, 3, 3, channels))
+    box = box_transform([0, 0, 0], [3, 2, 2])
+    p = mi.Point3f(0.25, 0.5, 0.75)
+    dirs = [mi.Vector3f(0, 0, 1), mi.Vector3f(0, 0, -1), mi.Vector3f(0.6, -0.8, 0)]
+    faint = gated(np.full((3, 3, 3, 1), -14.0), c, box)
+    colours = [np.array(faint.eval_local(p, d)[1]).ravel() for d in dirs]
+    mean = np.array(load(np.full((3, 3, 3, 1), -14.0), c[..., :3], box).eval_local(p, dirs[0])[1]).ravel()
+    for got in colours:
+        np.testing.assert_allclose(got, mean, atol=1e-5)
+    opaque, plain = gated(np.full((3, 3, 3, 1), 9.0), c, box), gated(np.full((3, 3, 3, 1), 9.0), c, box, gate=False)
+    for d in dirs:
+        np.testing.assert_allclose(np.array(opaque.eval_local(p, d)[1]), np.array(plain.eval_local(p, d)[1]), atol=1e-6)
+    raw = -0.7  # softplus 0.403, sigma h = 4 * 0.403 * 1.5: g = 0.911
+    half = gated(np.full((3, 3, 3, 1), raw), c, box)
+    g = 1 - np.exp(-4.0 * np.logaddexp(0, raw) * 1.5)
+    d = np.array([0.6, -0.8, 0.0])
+    basis = np.array(dr.sh_eval(mi.Vector3f(d), 1)).ravel()
+    coeffs = c[0, 0, 0, 3:] if channels == 12 else np.repeat(c[0, 0, 0, 3:], 3)
+    logit = c[0, 0, 0, :3] + g * sum(basis[k] / basis[0] * coeffs[3 * (k - 1):3 * k] for k in (1, 2, 3))
+    got = np.array(half.eval_local(mi.Point3f(0, 0, 0), mi.Vector3f(d))[1]).ravel()
+    np.testing.assert_allclose(got, 1 / (1 + np.exp(-logit)), rtol=1e-5)
+
+
+def test_the_gate_passes_no_gradient_to_density_and_scales_the_coefficients():
+    """d colour / d C_k is g times the ungated one (finite differences agree), and the colour's gradient
+    reaches the density by no path: the gate is held constant in the derivative."""
+    rng = np.random.default_rng(4)
+    density, c = np.full((2, 2, 2, 1), -0.7), rng.normal(0, 1, (2, 2, 2, 6))
+    p, d = mi.Point3f(0.3, 0.6, 0.2), mi.Vector3f(0.6, -0.8, 0)
+
+    def colour_sum(gate, color):
+        f = gated(density, color, gate=gate)
+        params = mi.traverse(f)
+        dr.enable_grad(params["density"], params["color"])
+        params.update()
+        total = dr.sum(f.eval_local(p, d)[1][0])
+        dr.backward(total)
+        return float(total[0]), np.array(dr.grad(params["density"])), np.array(dr.grad(params["color"]))
+
+    value, g_density, g_color = colour_sum(True, c)
+    _, g_density_plain, g_plain = colour_sum(False, c)
+    assert np.abs(g_density).max() == 0.0 and np.abs(g_density_plain).max() == 0.0
+    # per vertex, d R / d C_k over d R / d C_0 (red's mean) is g Y_k(d) / Y_0 (h = 1 here), and without the gate
+    # Y_k(d) / Y_0
+    gate = 1 - np.exp(-4.0 * np.logaddexp(0, -0.7) * 1.0)
+    basis = np.array(dr.sh_eval(d, 1)).ravel()
+    for grads, factor in ((g_color, gate), (g_plain, 1.0)):
+        expected = np.broadcast_to(factor * basis[1:] / basis[0], grads[..., 3:].shape)
+        np.testing.assert_allclose(grads[..., 3:] / grads[..., :1], expected, rtol=1e-4)
+    eps = 1e-3
+    bumped = c.copy()
+    bumped[0, 0, 0, 4] += eps
+    fd = (colour_sum(True, bumped)[0] - value) / eps
+    assert abs(fd - g_color[0, 0, 0, 4]) < 2e-3 * max(1.0, abs(fd))
+    with pytest.raises(RuntimeError, match="sh_gate must be a boolean"):  # Mitsuba wraps the plugin's error
+        mi.load_dict({**field_dict(density, c), "sh_gate": "yes"})
+
+
 def test_box_transform_places_the_grid():
     field = load(np.full((2, 2, 2, 1), 1.0), np.zeros((2, 2, 2, 3)), box_transform([1, 2, 3], [3, 6, 4]))
     local = field.world_to_local @ np.array([2.0, 4.0, 3.5, 1.0])

@@ -75,6 +75,8 @@ def test_grey_view_dependence_fits_saves_and_renders_from_its_scene_xml(tiny_dat
     refit = np.any(bg["data"][:, :4] != grid["data"][:, :4], axis=1)
     assert refit.any() and (bg["data"][refit, 4:] == 0).all()
     assert np.abs(bg["data"][~refit, 4:]).max() > 0  # outside it the full field's view dependence stays
+    # both fields are gated by opacity (sh_gate, the default), and the scene file says so
+    assert open(out / "scene.xml").read().count('<boolean name="sh_gate" value="true"/>') == 2
     scene = mi.load_file(str(out / "scene.xml"))
     ds = load_dataset(str(tiny_dataset))
     direct = render_camera(scene.integrator(), ds.cameras[ds.test[0]], ("full",))["full"][0]

@@ -12,7 +12,6 @@ from ..cameras import pixel_rays, world_up
 from ..device import from_numpy
 from ..field_state import (
     MEAN_CHANNELS,
-    FieldState,
     density_raw_for_alpha,
     dilate_vertices,
     neighbour_vertices,
@@ -82,7 +81,7 @@ def with_opacity(inputs, state, field, region, alpha):
     raw = density_raw_for_alpha(alpha, voxel_of(field) * step_voxels(inputs.cfg, state), field.density_scale)
     channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
     values = dr.select(dr.repeat(region, field.width) & (channel == 0), raw, field.data)
-    return FieldState(field.layout, values, field.channels, field.to_world.copy(), field.density_scale)
+    return field.with_data(values)
 
 
 def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
@@ -159,7 +158,7 @@ def start_harmonic(inputs, state, depths=None):
     values = (hull_fill(full.data, full.width, region, hull, neighbours, weights) if inputs.cfg.hull_color_fill
               else harmonic_fill(full.data, full.width, region, neighbours, weights=weights))
     # the object itself: empty, its colour the fill's (:func:`emptied`)
-    filled = FieldState(full.layout, values, full.channels, full.to_world, full.density_scale)
+    filled = full.with_data(values)
     # the hole's colour is the mean: the 2D prior that paints it disagrees between views, and view dependence
     # fitted to that would show each view its own inpainting (refit_elements keeps it 0)
     state.fields["bg"] = without_view_dependence(emptied(inputs, state, filled, obj), hull)
@@ -325,7 +324,7 @@ def clear_empty_background_color(inputs, state, region=None):
     values = dr.select(vertex_empty & (channel >= MEAN_CHANNELS), 0.0, values)
     if region is not None:
         values = dr.select(vertex_empty & dr.repeat(region, bg.width) & (channel == 0), EMPTY_DENSITY, values)
-    state.fields["bg"] = FieldState(bg.layout, values, bg.channels, bg.to_world, bg.density_scale)
+    state.fields["bg"] = bg.with_data(values)
     return float(dr.mean(mi.Float(empty))[0])
 
 

@@ -59,7 +59,8 @@ class FitConfig(Settings):
     # stepped with the then default rates and TV weights, and filled the hull isotropically
     ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
-             "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0}
+             "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
+             "sh_gate": False}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -173,6 +174,8 @@ class FitConfig(Settings):
                                      "fits (mi_voldis.fit.sh_degree); lower (0.25) gives degree 1 to captures whose "
                                      "colour changes with the view such as garden, but also to removal-family "
                                      "scenes whose removal then loses (reports/notes.md)", low=0)
+    sh_gate: bool = setting(True, "degree 1: view dependence in proportion to a voxel's opacity (radiance_field's "
+                                  "sh_gate), so that faint density shows its mean colour from every side")
     sh_trial_steps: int = setting(200, "'auto': steps of each degree's trial fit (density and colour, at the end of "
                                        "the coarse stage)", low=1)
 

@@ -21,7 +21,7 @@ import numpy as np
 from ..activations import logit
 from ..cameras import pixel_rays
 from ..device import from_numpy
-from ..field_state import FieldState, density_raw_for_alpha, resample
+from ..field_state import density_raw_for_alpha, resample
 from ..inpaint2d import fill_disparity, inpainter, inpainter_name
 from ..metrics import dilate
 from ..render.surface import median_depth
@@ -91,7 +91,7 @@ def write_surface(field, space, points, colors, allowed):
             value = from_numpy(mi.Float, raw[:, c - 1]) if c <= 3 else mi.Float(0.0)
             dr.scatter(data, value, address * w + c)
         dr.eval(data)
-        field = FieldState(field.layout, data, field.channels, field.to_world, field.density_scale)
+        field = field.with_data(data)
     return field, keys
 
 

@@ -62,6 +62,7 @@ class FitState:
             arrays[f"{r}/channels"] = np.array(s.channels)
             arrays[f"{r}/to_world"] = s.to_world
             arrays[f"{r}/density_scale"] = np.array(s.density_scale)
+            arrays[f"{r}/sh_gate"] = np.array(s.sh_gate)
         adam_arrays, meta["adam_t"] = self.adam.state()
         arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
         if self.hull_points is not None:
@@ -89,7 +90,8 @@ class FitState:
                 layout = Layout(tuple(int(v) for v in arrays[f"{r}/shape"]), int(arrays[f"{r}/brick"]),
                                 arrays[f"{r}/table"])
                 fields[r] = FieldState(layout, from_numpy(mi.Float, arrays[f"{r}/data"]), int(arrays[f"{r}/channels"]),
-                                       arrays[f"{r}/to_world"], float(arrays[f"{r}/density_scale"]))
+                                       arrays[f"{r}/to_world"], float(arrays[f"{r}/density_scale"]),
+                                       bool(arrays.get(f"{r}/sh_gate", False)))  # absent: saved before the gate
         adam.load({k[5:]: v for k, v in arrays.items() if k.startswith("adam/")}, meta["adam_t"])
         exposure = from_numpy(mi.Float, arrays["exposure"]) if "exposure" in arrays else None
         occupancy = Occupancy(arrays["occupancy/lo"], arrays["occupancy/hi"], arrays["occupancy/cells"],

@@ -47,7 +47,7 @@ import numpy as np
 
 from .. import exposure
 from ..data import check_rig
-from ..field_state import FieldState, neighbour_vertices
+from ..field_state import neighbour_vertices
 from ..inpaint2d import fallback_note
 from ..inpaint2d import inpainter as get_inpainter
 from ..metrics import psnr
@@ -185,7 +185,7 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         state.phase_times["bg"] = state.phase_times.get("bg", 0.0) + time.perf_counter() - t0
     if "bg" not in state.fields:  # no masks: nothing to disentangle, the background is the full scene
         full = state.fields["full"]
-        state.fields["bg"] = FieldState(full.layout, full.data, full.channels, full.to_world.copy(), full.density_scale)
+        state.fields["bg"] = full.with_data(full.data)
     if has_masks:
         cleared = cleared_region(inputs, state) > 0 if cfg.bg_strategy in ("clear", "lift") else None
         state.empty_color_fraction = clear_empty_background_color(inputs, state, cleared)

@@ -15,7 +15,12 @@ def _transform(name, m):
     return f'<transform name="{name}"><matrix value="{_matrix(m)}"/></transform>'
 
 
-def save_field(directory, stem, density, color, to_world, density_scale=1.0):
+def _activation(density_scale, sh_gate):
+    gate = '<boolean name="sh_gate" value="true"/>' if sh_gate else ""  # absent: false, as files before it
+    return f'<float name="density_scale" value="{density_scale:.9g}"/>{gate}'
+
+
+def save_field(directory, stem, density, color, to_world, density_scale=1.0, sh_gate=False):
     """Write ``<stem>_density.vol`` and ``<stem>_color.vol`` (raw grids, header bbox = the world box
     when ``to_world`` is axis-aligned) and return the ``<medium>`` XML body for them."""
     to_world = np.asarray(to_world, dtype=np.float64)
@@ -27,11 +32,11 @@ def save_field(directory, stem, density, color, to_world, density_scale=1.0):
         write_vol(os.path.join(directory, names[key]), values, lo, hi)
     return (f'<string name="density" value={quoteattr(names["density"])}/>'
             f'<string name="color" value={quoteattr(names["color"])}/>'
-            f'<float name="density_scale" value="{density_scale:.9g}"/>'
+            f'{_activation(density_scale, sh_gate)}'
             f'{_transform("to_world", to_world)}')
 
 
-def save_grid(directory, stem, layout, values, to_world, density_scale=1.0):
+def save_grid(directory, stem, layout, values, to_world, density_scale=1.0, sh_gate=False):
     """Write ``<stem>_grid.npz``, a brick grid (:mod:`mi_voldis.bricks`: its ``table``, the allocated
     bricks' raw ``values`` (bricks * B^3, channels), ``vertices`` and the box as ``bbox``), and return
     the ``<medium>`` XML body for it. Written to a temporary file and renamed."""
@@ -43,7 +48,7 @@ def save_grid(directory, stem, layout, values, to_world, density_scale=1.0):
              brick=np.array(layout.brick), bbox=np.stack([corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)]))
     os.replace(tmp, os.path.join(directory, name))
     return (f'<string name="grid" value={quoteattr(name)}/>'
-            f'<float name="density_scale" value="{density_scale:.9g}"/>'
+            f'{_activation(density_scale, sh_gate)}'
             f'{_transform("to_world", to_world)}')
 
 

@@ -8,7 +8,7 @@ import mitsuba as mi
 import numpy as np
 
 from .. import bricks, grid
-from ..activations import sigmoid, softplus
+from ..activations import one_minus_exp, sigmoid, softplus
 from ..io.vol import grid_values, read_header, read_vol
 from ..transforms import to_matrix
 
@@ -81,6 +81,12 @@ class RadianceField(mi.Medium):
          are densities per voxel, as DVGO does (a surface is then opaque at raw ~ 10, a value Adam
          reaches in tens of steps, instead of ~ 10 / voxel). (Default: 1)
 
+     * - sh_gate
+       - |bool|
+       - View dependence in proportion to opacity: the harmonics' terms scaled by the opacity g of the
+         density over one voxel (below). Faint density then shows its mean colour from every side, so a
+         fit cannot explain a view-dependent look with a haze of view-coloured density. (Default: false)
+
     The field answers only one question, density and colour at points:
 
     .. math::
@@ -96,6 +102,11 @@ class RadianceField(mi.Medium):
     coefficients does not change it. With grey view dependence (6 colour channels) every C_k, k >= 1,
     is one scalar added to all three logits: a gloss that brightens or darkens a surface with the view
     (a varnished top that mirrors the sky) at half a degree-1 vertex's memory (8 floats against 16).
+
+    With ``sh_gate`` every term k >= 1 is scaled by g(p) = 1 - exp(-sigma(p) h), the opacity of the
+    density over the grid's largest voxel edge h: 1 on a surface, sigma h on a haze that light crosses.
+    No gradient flows to the density through g (it is held constant in the derivative): a faint voxel
+    would otherwise be pushed to grow opaque to buy view dependence.
 
     The grid's vertex (i, j, k) sits at local position (i/(X-1), j/(Y-1), k/(Z-1)); the tensors are
     ``mi.VolumeGrid``-ordered (Z, Y, X, C). The ``voldis`` integrator evaluates this medium; Mitsuba's
@@ -142,6 +153,9 @@ class RadianceField(mi.Medium):
         self.density_scale = float(props.get("density_scale", 1.0))
         if not self.density_scale > 0:
             raise ValueError(f"{name}: density_scale must be positive, got {self.density_scale}")
+        self.sh_gate = props.get("sh_gate", False)
+        if not isinstance(self.sh_gate, bool):
+            raise ValueError(f"{name}: sh_gate must be a boolean, got {self.sh_gate!r}")
         self._packed = None
         self.parameters_changed()
 
@@ -221,10 +235,15 @@ class RadianceField(mi.Medium):
             self._density, self._color = grid.unpack(self._packed, [1, self.channels - 1],
                                                      self.shape[::-1])
 
+    @property
+    def voxel(self):
+        """The grid's largest voxel edge, in the units of the box ``to_world`` maps onto."""
+        return float(np.max(np.linalg.norm(self.to_world[:3, :3], axis=0) / (np.array(self.shape) - 1)))
+
     def to_string(self):
         kind = f"bricks={self.layout.allocated}/{self.layout.table.size}, " if self.layout is not None else ""
         return (f"RadianceField[shape={self.shape}, {kind}sh_degree={self.sh_degree}, "
-                f"density_scale={self.density_scale}, to_world={self.to_world.tolist()}]")
+                f"density_scale={self.density_scale}, sh_gate={self.sh_gate}, to_world={self.to_world.tolist()}]")
 
     # -------------------------------------------------------------------- field evaluation
     def eval_local(self, p, d, data=None, active=True):
@@ -279,14 +298,17 @@ class RadianceField(mi.Medium):
         logits = [v[1], v[2], v[3]]
         if self.sh_degree > 0:
             basis = dr.sh_eval(dr.normalize(d), self.sh_degree)
+            # the gate g = 1 - exp(-sigma h) = 1 - exp(-softplus(D) s h), constant in the derivative
+            gate = dr.detach(one_minus_exp(softplus(v[0]) * (self.density_scale * self.voxel))) if self.sh_gate \
+                else 1.0
             if self.grey:  # one coefficient a harmonic, the same for R, G and B
                 gloss = mi.Float(0.0)
                 for k in range(1, len(basis)):
                     gloss = dr.fma(basis[k] * (1.0 / SH_Y0), v[3 + k], gloss)
-                logits = [c + gloss for c in logits]
+                logits = [c + gate * gloss for c in logits]
             else:
                 for k in range(1, len(basis)):
-                    scale = basis[k] * (1.0 / SH_Y0)
+                    scale = gate * basis[k] * (1.0 / SH_Y0)
                     for ch in range(3):
                         logits[ch] = dr.fma(scale, v[1 + 3 * k + ch], logits[ch])
         return sigma, mi.Color3f(sigmoid(logits[0]), sigmoid(logits[1]), sigmoid(logits[2]))
