@@ -1,8 +1,10 @@
 import sys
+
 import mi_voldis  # noqa
+from mi_voldis.field_state import with_sh_degree
 from mi_voldis.fit.state import FitState
 from mi_voldis.optim.adam import Adam
-from mi_voldis.field_state import with_sh_degree
+
 path = sys.argv[1]
 s = FitState.load(path, Adam({}, 0.9, 0.99))
 print(s.phase, {k: (f.sh_degree, f.grey, f.sh_gate) for k, f in s.fields.items()})
