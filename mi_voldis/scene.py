@@ -84,7 +84,11 @@ def load_scene(path, need_fields=True):
     try:
         scene = mi.load_file(path)
     except Exception as e:  # noqa: BLE001  (Mitsuba raises RuntimeError for XML, ValueError from plugins)
-        raise ValueError(str(e) if path in str(e) else f"{path}: {e}") from None
+        text = str(e)
+        if "Traceback (most recent call last):" in text:  # a Python plugin raised: its own message, last
+            text = [line for line in text.splitlines() if line.strip()][-1].strip()
+            text = f"{path}: {text.partition(': ')[2] or text}"
+        raise ValueError(text if path in text else f"{path}: {text}") from None
     if need_fields and not getattr(scene.integrator(), "fields", None):
         raise ValueError(f"{path}: its integrator is not a 'voldis' integrator with radiance fields")
     return scene

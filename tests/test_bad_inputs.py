@@ -78,7 +78,7 @@ def world(tiny_dataset, tiny_run, tmp_path_factory):
         meta["frames"] = frames
         json.dump(meta, open(copy / "transforms.json", "w"))
     for name, breakage in (("no_config", "config"), ("bad_grid", "grid"), ("bad_xml", "xml"), ("nan_grid", "nan"),
-                           ("inverted_box", "box")):
+                           ("inverted_box", "box"), ("bad_gate", "gate")):
         broken = base / name
         shutil.copytree(tiny_run, broken)
         if breakage == "config":
@@ -88,6 +88,10 @@ def world(tiny_dataset, tiny_run, tmp_path_factory):
                 f.truncate(100)
         elif breakage == "xml":
             (broken / "scene.xml").write_text((broken / "scene.xml").read_text()[:-40])
+        elif breakage == "gate":  # a plugin property of the wrong type: the plugin's own message
+            text = (broken / "scene.xml").read_text()
+            (broken / "scene.xml").write_text(text.replace('<boolean name="sh_gate" value="true"/>',
+                                                           '<string name="sh_gate" value="yes"/>', 1))
         else:
             import numpy as np
             with np.load(broken / "full_grid.npz") as f:
@@ -167,6 +171,8 @@ CASES = [
     (R, ["{base}/inverted_box/scene.xml", "--out", "{existing}"], 1,
      "{base}/inverted_box/full_grid.npz: the grid's box needs min < max on every axis"),
     (R, ["{base}/none.xml", "--out", "{existing}"], 1, "{base}/none.xml: no such scene file"),
+    (R, ["{base}/bad_gate/scene.xml", "--out", "{existing}"], 1,
+     "{base}/bad_gate/scene.xml: full: sh_gate must be a boolean, got 'yes'"),
     (R, ["{run}/scene.xml", "--out", "{existing}", "--spp", "-4"], 2, "--spp: must be a whole number >= 1"),
     (R, ["{run}/scene.xml", "--out", "{existing}", "--spp", "0"], 2, "--spp: must be a whole number >= 1"),
     (R, ["{run}/scene.xml", "--out", "{existing}", "--width", "0", "--height", "0"], 2, "--width: must be"),
