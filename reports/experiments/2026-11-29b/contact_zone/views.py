@@ -3,6 +3,7 @@ inpainter), cropped around the object of family17 and enlarged 4x.
 
     python reports/experiments/2026-11-29b/contact_zone/views.py DATASET REFIT OUT.png
 REFIT: a `python -m mi_voldis.bench.strategies` output folder (its viewNNN_bg.png)."""
+import os
 import sys
 
 import cv2
@@ -16,6 +17,8 @@ from mi_voldis.inpaint2d import inpainter  # noqa: E402
 from mi_voldis.metrics import dilate, psnr, score_dilation  # noqa: E402
 
 data, refit, out = sys.argv[1:4]
+if os.path.exists(out):  # a picture of someone else's is not replaced
+    sys.exit(f"error: {out}: already exists (give a new file name)")
 ds = load_dataset(data, "transforms", 8)
 dil = score_dilation(ds.size)
 rows = []

@@ -2,7 +2,9 @@
 weight pruning, applied after the fit): held-out PSNR against evaluated samples a ray.
 
     python reports/experiments/2026-11-29b/weight_prune/prune.py RUN TAUS [PIXEL_STRIDE] [--evaluate]
+        [--prune-unsampled]
 
+--prune-unsampled: cells no training sample falls in are pruned too (their weight counted as 0).
 --evaluate: also the fit's own held-out evaluation (mi_voldis.fit.report.evaluate: the background in the
 mask, coverage IoU, haze) with each pruned grid.
 
@@ -33,7 +35,8 @@ render_cost = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(render_cost)
 
 full_eval = "--evaluate" in sys.argv
-sys.argv = [a for a in sys.argv if a != "--evaluate"]
+keep_unsampled = "--prune-unsampled" not in sys.argv
+sys.argv = [a for a in sys.argv if a not in ("--evaluate", "--prune-unsampled")]
 run = FittedRun(sys.argv[1])
 ds = run.dataset
 taus = [float(a) for a in sys.argv[2].split(",")]
@@ -71,7 +74,7 @@ print(f"max weights over {len(ds.train)} training views in {time.perf_counter() 
       f"never sampled {(occ.cells & (mw < 0)).sum() / occ.cells.sum():.3f} of them", flush=True)
 
 for tau in taus:
-    cells = occ.cells & ((mw >= tau) | (mw < 0)) if tau > 0 else occ.cells
+    cells = occ.cells & ((mw >= tau) | ((mw < 0) & keep_unsampled)) if tau > 0 else occ.cells
     pruned = Occupancy(occ.lo, occ.hi, cells, occ.reach)
     integ.use_occupancy(pruned)
     out = [render_cost.view(integ, ds, v) for v in ds.test]
