@@ -11,7 +11,7 @@ export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 .PHONY: setup demo test bench clean
 
 $(VENV)/.installed: pyproject.toml constraints.txt
-	$(PYTHON) -m venv $(VENV)
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)  # a venv the user made (any Python 3.11) is used as it is
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -c constraints.txt -e ".[test]"
 	touch $@
