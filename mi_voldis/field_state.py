@@ -2,10 +2,12 @@
 box of scene space, made, carved, resampled onto finer lattices and re-degreed.
 
 A :class:`FieldState` holds the lattice's :class:`~mi_voldis.bricks.Layout` and the packed vertex data
-(density and colour coefficients interleaved per vertex, the empty brick first) as one Dr.Jit array: the
-very array the ``radiance_field`` plugin reads and Adam steps on. Resampling evaluates the trilinear
-interpolant of the old grid at the new vertices, so a finer lattice over the same box represents the
-same field; carving keeps only the bricks where some vertex has density (grown by a brick).
+(density and colour coefficients interleaved per vertex, the empty brick first; then, for grey view
+dependence on a lattice of its own, that lattice's vertices: ``radiance_field``'s ``view``) as one Dr.Jit
+array: the very array the ``radiance_field`` plugin reads and Adam steps on. Resampling evaluates the
+trilinear interpolant of the old grid at the new vertices, so a finer lattice over the same box represents
+the same field; carving keeps only the bricks where some vertex has density (grown by a brick). The view
+lattice keeps its resolution through both.
 """
 import dataclasses
 from dataclasses import dataclass
@@ -29,11 +31,12 @@ BRICK = 8  # vertices along a brick's edge
 @dataclass
 class FieldState:
     layout: bricks.Layout  # the lattice and its allocated bricks
-    data: mi.Float         # packed values, (slots * B^3) vertices x width floats, slot 0 the empty brick
-    channels: int          # 1 + colour coefficients (radiance_field.color_channels)
+    data: mi.Float         # packed values, (slots * B^3 + view vertices) x width floats, slot 0 the empty brick
+    channels: int          # 1 + colour coefficients at a brick vertex (radiance_field.color_channels)
     to_world: np.ndarray   # unit cube -> scene space (an axis-aligned box)
     density_scale: float = 1.0  # sigma = density_scale * softplus(raw)
     sh_gate: bool = False       # view dependence scaled by a voxel's opacity (radiance_field's sh_gate)
+    view_shape: tuple | None = None  # (X, Y, Z) of the grey degree-1 view lattice after the bricks, or None
 
     @property
     def shape(self):
@@ -44,36 +47,60 @@ class FieldState:
         return dataclasses.replace(self, data=data, channels=self.channels if channels is None else channels,
                                    to_world=self.to_world.copy())
 
+    def bricks_data(self):
+        """The bricks' packed values alone (the view lattice's rows left out)."""
+        if self.view_shape is None:
+            return self.data
+        return dr.gather(mi.Float, self.data, dr.arange(mi.UInt32, self.vertices * self.width))
+
+    def with_bricks(self, values):
+        """The same field with the bricks' packed values ``values`` (the view lattice's kept)."""
+        return self.with_data(_with_view_rows(values, self))
+
     @property
     def width(self):
         return packet_width(self.channels)
 
     @property
     def sh_degree(self):
-        return COLOR_LAYOUTS[self.channels - 1][0]
+        return 1 if self.view_shape is not None else COLOR_LAYOUTS[self.channels - 1][0]
 
     @property
     def grey(self):
         """View dependence by one grey coefficient a harmonic (not an RGB triple)."""
-        return COLOR_LAYOUTS[self.channels - 1][1]
+        return self.view_shape is not None or COLOR_LAYOUTS[self.channels - 1][1]
 
     @property
     def vertices(self):
-        """Vertices stored (allocated bricks and the empty brick)."""
+        """Brick vertices stored (allocated bricks and the empty brick)."""
         return self.layout.slots * self.layout.vertices_per_brick
+
+    @property
+    def view_vertices(self):
+        """Vertices of the view lattice (0 without one)."""
+        return 0 if self.view_shape is None else int(np.prod(self.view_shape))
 
     def plugin(self):
         """``radiance_field`` plugin dict over these very values (no copy)."""
+        view = {} if self.view_shape is None else {"view_vertices": mi.ScalarVector3f(*self.view_shape)}
         return {"type": "radiance_field", "table": mi.TensorXf(self.layout.table.ravel().astype(np.float32)),
-                "data": mi.TensorXf(self.data, (self.vertices, self.width)), "channels": self.channels,
+                "data": mi.TensorXf(self.data, (self.vertices + self.view_vertices, self.width)),
+                "channels": self.channels, **view,
                 "vertices": mi.ScalarVector3f(*self.shape), "brick": self.layout.brick,
                 "density_scale": float(self.density_scale), "sh_gate": bool(self.sh_gate),
                 "to_world": to_scalar_transform(self.to_world)}
 
     def values(self):
         """The allocated bricks' values as NumPy (allocated * B^3, channels) (for files)."""
-        v = np.array(self.data).reshape(self.vertices, self.width)
-        return v[self.layout.vertices_per_brick:, :self.channels]
+        v = np.array(self.data).reshape(-1, self.width)
+        return v[self.layout.vertices_per_brick:self.vertices, :self.channels]
+
+    def view_values(self):
+        """The view lattice's coefficients as NumPy (Z, Y, X, 3) (for files), or None without one."""
+        if self.view_shape is None:
+            return None
+        v = np.array(self.data).reshape(-1, self.width)[self.vertices:, 1:4]
+        return v.reshape(*self.view_shape[::-1], 3)
 
 
 def shape_for(lo, hi, resolution):
@@ -97,11 +124,16 @@ def density_raw_for_alpha(alpha, step, density_scale):
     return float(inverse_softplus(-np.log1p(-alpha) / step / density_scale))
 
 
-def new_field(lo, hi, resolution, sh_degree, density_raw, density_scale, brick=BRICK, grey=False, sh_gate=False):
+def new_field(lo, hi, resolution, sh_degree, density_raw, density_scale, brick=BRICK, grey=False, sh_gate=False,
+              view_resolution=None):
     """A field over [lo, hi] with ``resolution`` vertices along its longest side, every brick
     allocated, raw density ``density_raw`` and raw colour 0 everywhere (colour of ``sh_degree``, with grey
-    view dependence where ``grey``, gated by opacity where ``sh_gate``)."""
+    view dependence where ``grey``, on a view lattice of ``view_resolution`` vertices along the longest
+    side where given, gated by opacity where ``sh_gate``)."""
     shape = shape_for(lo, hi, resolution)
+    if sh_degree == 1 and grey and view_resolution:
+        return with_sh_degree(new_field(lo, hi, resolution, 0, density_raw, density_scale, brick, sh_gate=sh_gate),
+                              1, True, view_resolution)
     channels = 1 + color_channels(sh_degree, grey)
     bx, by, bz = bricks.counts(shape, brick)
     layout = bricks.Layout(shape, brick, np.arange(1, bx * by * bz + 1, dtype=np.uint32).reshape(bz, by, bx))
@@ -162,9 +194,24 @@ def resample(state, shape=None, keep=None):
     for c in range(width):
         v = values[c] if c < state.channels else mi.Float(0.0)
         dr.scatter(data, dr.select(real, v, float(empty[c])), idx * width + c)
-    new.data = data
+    new.data = _with_view_rows(data, state)
     dr.eval(new.data)
     return new
+
+
+def _with_view_rows(bricks_data, state, view=None):
+    """Packed brick values ``bricks_data`` followed by the view lattice's rows: ``view`` (packed, that
+    lattice's vertices x ``state.width``) or else ``state``'s own (none without a view lattice)."""
+    if view is None:
+        if state.view_shape is None:
+            return bricks_data
+        view = dr.gather(mi.Float, dr.detach(state.data),
+                         dr.arange(mi.UInt32, state.view_vertices * state.width) + state.vertices * state.width)
+    n = dr.width(bricks_data)
+    out = dr.empty(mi.Float, n + dr.width(view))
+    dr.scatter(out, bricks_data, dr.arange(mi.UInt32, n))
+    dr.scatter(out, view, dr.arange(mi.UInt32, dr.width(view)) + n)
+    return out
 
 
 def resampled_vertices(state, shape, keep=None):
@@ -193,12 +240,25 @@ def _bricks_over(keep, old, shape):
     return out
 
 
-def with_sh_degree(state, degree, grey=False):
+def with_sh_degree(state, degree, grey=False, view_resolution=None):
     """Colour coefficients truncated or zero-extended to ``degree`` (exact: see radiance_field), with grey
-    view dependence where ``grey``. Grey and RGB harmonics are not each other's truncations: between them
-    only through degree 0."""
-    if min(degree, state.sh_degree) > 0 and grey != state.grey:
-        raise ValueError("with_sh_degree: grey and RGB view dependence convert only through degree 0")
+    view dependence where ``grey``, on a view lattice of ``view_resolution`` vertices along the box's
+    longest side where given (zero-extended too). Grey and RGB harmonics, and harmonics at the vertices
+    and on a view lattice, are not each other's truncations: between them only through degree 0."""
+    view = degree == 1 and grey and bool(view_resolution)
+    if min(degree, state.sh_degree) > 0 and (grey != state.grey or view != (state.view_shape is not None)):
+        raise ValueError("with_sh_degree: grey and RGB view dependence, or view dependence at the vertices and "
+                         "on a view lattice, convert only through degree 0")
+    if view and state.view_shape is not None:
+        return state
+    if state.view_shape is not None:  # to degree 0: the bricks alone
+        state = dataclasses.replace(state, data=state.bricks_data(), view_shape=None, to_world=state.to_world.copy())
+        return with_sh_degree(state, degree, grey)
+    if view:
+        base = with_sh_degree(state, 0)
+        shape = shape_for(*box_corners(state.to_world), view_resolution)
+        zeros = dr.zeros(mi.Float, int(np.prod(shape)) * base.width)
+        return dataclasses.replace(base, data=_with_view_rows(base.data, base, zeros), view_shape=shape)
     channels = 1 + color_channels(degree, grey)
     width, old = packet_width(channels), state.width
     idx = dr.arange(mi.UInt32, state.vertices)
@@ -214,9 +274,25 @@ def with_sh_degree(state, degree, grey=False):
 
 def without_view_dependence(state, region):
     """``state`` with the view-dependent coefficients (every channel after the mean colour) of the vertices in
-    ``region`` (Float or Bool per stored vertex) set to 0: there the colour is the mean, from every view."""
+    ``region`` (Float or Bool per stored brick vertex) set to 0: there the colour is the mean, from every
+    view. On a view lattice: the coefficients of every view vertex of a cell that holds a vertex in ``region``."""
     if state.sh_degree == 0:
         return state
+    if state.view_shape is not None:
+        local, real = vertex_local(state)
+        inside = real & (mi.Float(region) > 0)
+        sx, sy, sz = state.view_shape
+        x = dr.clip(local, 0.0, 1.0) * mi.Vector3f(sx - 1, sy - 1, sz - 1)
+        i = dr.minimum(mi.Vector3u(mi.Vector3i(x)), mi.Vector3u(sx - 2, sy - 2, sz - 2))
+        marked = dr.zeros(mi.Float, state.view_vertices)
+        for dz in (0, 1):
+            for dy in (0, 1):
+                for dx in (0, 1):
+                    dr.scatter(marked, 1.0, ((i.z + dz) * sy + i.y + dy) * sx + i.x + dx, inside)
+        view = dr.arange(mi.UInt32, state.view_vertices * state.width)
+        old = dr.gather(mi.Float, state.data, view + state.vertices * state.width)
+        cleared = dr.select(dr.gather(mi.Float, marked, view // state.width) > 0, 0.0, old)
+        return state.with_data(_with_view_rows(state.bricks_data(), state, cleared))
     i = dr.arange(mi.UInt32, dr.width(state.data))
     inside = mi.Bool(dr.gather(mi.Float, mi.Float(region), i // state.width) > 0)
     data = dr.select(inside & (i % state.width >= MEAN_CHANNELS), 0.0, state.data)

@@ -77,12 +77,12 @@ def unpack(packed, channels, zyx):
     return out
 
 
-def trilinear(data, shape, width, channels, p, active=True):
+def trilinear(data, shape, width, channels, p, active=True, offset=0):
     """Trilinear interpolation of a packed grid at local points ``p`` in [0, 1]^3.
 
-    ``data``: flat array from :func:`pack`; ``shape``: (X, Y, Z); ``width``: its packet width;
-    ``channels``: how many leading channels to return. Points outside the cube are clamped to it
-    (callers mask them). Returns a list of ``channels`` Float arrays.
+    ``data``: flat array from :func:`pack` (the grid's vertices from vertex ``offset`` on); ``shape``:
+    (X, Y, Z); ``width``: its packet width; ``channels``: how many leading channels to return. Points
+    outside the cube are clamped to it (callers mask them). Returns a list of ``channels`` Float arrays.
 
         v(p) = sum_{corners c} prod_axis (f_axis if c_axis else 1 - f_axis) * V[i + c]
     with i = floor(p * (res - 1)) and f = p * (res - 1) - i."""
@@ -90,7 +90,7 @@ def trilinear(data, shape, width, channels, p, active=True):
     x = dr.clip(p, 0.0, 1.0) * mi.Vector3f(sx - 1, sy - 1, sz - 1)
     i = dr.minimum(mi.Vector3u(mi.Vector3i(x)), mi.Vector3u(sx - 2, sy - 2, sz - 2))
     f = x - mi.Vector3f(i)
-    base = (i.z * sy + i.y) * sx + i.x
+    base = (i.z * sy + i.y) * sx + i.x + offset
     weights = ((1.0 - f.x, f.x), (1.0 - f.y, f.y), (1.0 - f.z, f.z))
     n = dr.width(base)
     out = [mi.Float(0.0) for _ in range(channels)]

@@ -1,6 +1,7 @@
 """Regularisers of fitting, as analytic gradients added to the optimised grids (no AD pass needed).
 
-On a field's packed values t (n stored values: vertices x channels, see :mod:`mi_voldis.field_state`):
+On a field's packed values t (n stored values: the lattice's vertices x channels, see
+:mod:`mi_voldis.field_state`; a view lattice's rows after them are no part of it):
 
 * total variation, TV(t) = sum_v sum_axis (t[v + e_axis] - t[v])^2 / n, per channel;
 * sparsity, the L1 norm of activated density, sum_v softplus(D_v).
@@ -15,8 +16,9 @@ def tv_gradient(values, width, neighbours, at=None):
     """Gradient of TV (module docstring) of packed ``values`` (``width`` floats per vertex) whose vertices
     have the axis ``neighbours`` (6 UInt32 arrays of vertex indices, Neumann border: a vertex is its own
     neighbour there): 2 (2 t[v] - t[v + e] - t[v - e]) summed over axes, divided by n; at the elements
-    ``at`` (UInt32 indices into ``values``, in their order) where given, else at every element."""
-    n = dr.width(values)
+    ``at`` (UInt32 indices into ``values``, in their order) where given, else at every element of the
+    lattice's vertices (those ``neighbours`` covers)."""
+    n = dr.width(neighbours[0]) * width
     if at is None and width % 4 == 0:
         return add_tv_gradient(dr.zeros(mi.Float, n), values, width, neighbours, [1.0] * width)
     i = dr.arange(mi.UInt32, n) if at is None else at
@@ -30,13 +32,15 @@ def tv_gradient(values, width, neighbours, at=None):
 
 def add_tv_gradient(out, values, width, neighbours, weights):
     """``out`` (a Float as wide as ``values``) plus ``weights[c]`` times the TV gradient of channel c
-    (:func:`tv_gradient`) at every element, ``weights`` a number per slot of a vertex. Whole vertices are
-    read in packets of 4 channels, each neighbour index once, and added into ``out`` in place where
-    nothing else holds it (no array as wide as the grid for the TV alone)."""
-    n = dr.width(values)
+    (:func:`tv_gradient`) at every element of the lattice's vertices, ``weights`` a number per slot of a
+    vertex. Whole vertices are read in packets of 4 channels, each neighbour index once, and added into
+    ``out`` in place where nothing else holds it (no array as wide as the grid for the TV alone)."""
+    n = dr.width(neighbours[0]) * width
     if width % 4:
-        return out + dr.gather(mi.Float, mi.Float(weights), dr.arange(mi.UInt32, n) % width) * tv_gradient(
-            values, width, neighbours, dr.arange(mi.UInt32, n))
+        i = dr.arange(mi.UInt32, n)
+        tv = dr.gather(mi.Float, mi.Float(weights), i % width) * tv_gradient(values, width, neighbours, i)
+        dr.scatter_add(out, tv, i)
+        return out
     packets = width // 4
     vertex = dr.arange(mi.UInt32, n // width)
     others = [dr.gather(mi.UInt32, nb, vertex) * packets for nb in neighbours]

@@ -72,8 +72,11 @@ def save_any_field(folder, role, field):
         return save_field(folder, role, np.array(field.density), np.array(field.color), field.to_world,
                           field.density_scale, field.sh_gate)
     packed = field.data if hasattr(field, "data") and not hasattr(field, "packed") else field.packed
-    values = np.array(packed).reshape(-1, field.width)[layout.vertices_per_brick:, :field.channels]
-    return save_grid(folder, role, layout, values, field.to_world, field.density_scale, field.sh_gate)
+    rows = np.array(packed).reshape(-1, field.width)
+    bricks_rows = layout.slots * layout.vertices_per_brick
+    view = None if field.view_shape is None else rows[bricks_rows:, 1:4].reshape(*field.view_shape[::-1], 3)
+    return save_grid(folder, role, layout, rows[layout.vertices_per_brick:bricks_rows, :field.channels],
+                     field.to_world, field.density_scale, field.sh_gate, view)
 
 
 def load_scene(path, need_fields=True):

@@ -57,9 +57,9 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
     dataset = config["dataset"]["path"]
     assert set(FitConfig.ADDED) <= set(config)
     # the settings it was fitted with as a run before them would have been; those whose default has
-    # changed since (hull_fill_vertical, sh_gate) read back as the old value
+    # changed since (hull_fill_vertical, sh_gate, sh_view_resolution, sh_view_from) read back as the old value
     changed = {key for key, value in FitConfig.ADDED.items() if config[key] != value}
-    assert changed == {"hull_fill_vertical", "sh_gate"}
+    assert changed == {"hull_fill_vertical", "sh_gate", "sh_view_resolution", "sh_view_from"}
     for key in FitConfig.ADDED:
         if key not in changed:
             del config[key]

@@ -56,12 +56,14 @@ def test_scene_xml_renders_the_fitted_fields(tiny_run):
 
 
 def test_grey_view_dependence_fits_saves_and_renders_from_its_scene_xml(tiny_dataset, tmp_path):
-    """``sh_color=grey`` at degree 1: 7 channels a vertex in packets of 8 in the run's grids, recorded in
-    metrics.json, and scene.xml renders what the metrics were computed on."""
+    """``sh_color=grey`` at degree 1 at every vertex (``sh_view_resolution`` null): 7 channels a vertex in
+    packets of 8 in the run's grids, recorded in metrics.json, and scene.xml renders what the metrics were
+    computed on."""
     from mi_voldis.data import load_dataset
     from mi_voldis.metrics import psnr
     out = tmp_path / "grey"
-    sets = [s for s in TINY_FIT if not s.startswith("sh_degree")] + ["sh_degree=1", "sh_color=\"grey\""]
+    sets = [s for s in TINY_FIT if not s.startswith("sh_degree")] + ["sh_degree=1", "sh_color=\"grey\"",
+                                                                     "sh_view_resolution=null"]
     subprocess.run(train_args(tiny_dataset, out, sets), check=True, capture_output=True)
     m = json.load(open(out / "metrics.json"))
     assert (m["sh_degree"], m["sh_color"]) == (1, "grey")
@@ -77,6 +79,31 @@ def test_grey_view_dependence_fits_saves_and_renders_from_its_scene_xml(tiny_dat
     assert np.abs(bg["data"][~refit, 4:]).max() > 0  # outside it the full field's view dependence stays
     # both fields are gated by opacity (sh_gate, the default), and the scene file says so
     assert open(out / "scene.xml").read().count('<boolean name="sh_gate" value="true"/>') == 2
+    scene = mi.load_file(str(out / "scene.xml"))
+    ds = load_dataset(str(tiny_dataset))
+    direct = render_camera(scene.integrator(), ds.cameras[ds.test[0]], ("full",))["full"][0]
+    assert abs(psnr(np.clip(direct, 0, 1), ds.images[ds.test[0]]) - m["per_view"][0]["psnr"]) < 1e-3
+
+
+@pytest.mark.parametrize("view_from", [0.5, 1.0])
+def test_grey_view_dependence_on_a_view_lattice_fits_saves_and_renders(tiny_dataset, tmp_path, view_from):
+    """``sh_color=grey`` on a view lattice: the bricks hold density and RGB (4 channels), the grid files the
+    lattice as ``view``; progressive view dependence fits it from ``sh_view_from`` of the planned steps on
+    (1: never, the lattice stays 0); scene.xml renders what the metrics were computed on."""
+    from mi_voldis.data import load_dataset
+    from mi_voldis.metrics import psnr
+    out = tmp_path / "view"
+    sets = [s for s in TINY_FIT if not s.startswith("sh_degree")] + [
+        "sh_degree=1", "sh_color=\"grey\"", "sh_view_resolution=6", f"sh_view_from={view_from}"]
+    subprocess.run(train_args(tiny_dataset, out, sets), check=True, capture_output=True)
+    m = json.load(open(out / "metrics.json"))
+    assert (m["sh_degree"], m["sh_color"]) == (1, "grey")
+    grid, bg = np.load(out / "full_grid.npz"), np.load(out / "bg_grid.npz")
+    assert grid["data"].shape[-1] == 4 and max(grid["view"].shape[:3]) == 6 and grid["view"].shape[3] == 3
+    assert (np.abs(grid["view"]).max() > 0) == (view_from < 1)
+    if view_from < 1:  # the background's hole is cleared of view dependence, the rest of its lattice kept
+        cleared = (bg["view"] == 0).all(-1) & (grid["view"] != 0).any(-1)
+        assert cleared.any() and (bg["view"][~cleared] == grid["view"][~cleared]).all()
     scene = mi.load_file(str(out / "scene.xml"))
     ds = load_dataset(str(tiny_dataset))
     direct = render_camera(scene.integrator(), ds.cameras[ds.test[0]], ("full",))["full"][0]

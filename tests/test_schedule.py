@@ -508,7 +508,7 @@ def test_the_default_plan_follows_the_backend(monkeypatch):
 def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices_ask():
     from types import SimpleNamespace
 
-    from mi_voldis.fit.schedule import memory_resolution, memory_scale, resolution_bounds
+    from mi_voldis.fit.schedule import BYTES_PER_VERTEX, memory_resolution, memory_scale, resolution_bounds
     from mi_voldis.fit.train import cap_for_sh_degree
     assert memory_scale(0) == memory_scale("auto") == 1.0 and memory_scale(1) == 4.0  # 16 floats a vertex, not 4
     assert memory_scale(1, grey=True) == 2.0 and memory_scale(0, grey=True) == 1.0  # grey: 7 floats in 8
@@ -518,10 +518,15 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     for r, d in ((r0, 0), (r1, 1)):
         assert memory_at(r, cells, degree=d) <= cfg.max_memory_gib * 2 ** 30 < memory_at(r + 16, cells, degree=d)
     assert 64 < r1 < r0
-    rg = memory_resolution(cfg.replace(sh_color="grey"), cells, 64, 64, 1, PIXELS)
+    rg = memory_resolution(cfg.replace(sh_color="grey", sh_view_resolution=None), cells, 64, 64, 1, PIXELS)
     assert memory_at(rg, cells, degree=1, grey=True) <= cfg.max_memory_gib * 2 ** 30 < memory_at(rg + 16, cells,
                                                                                               degree=1, grey=True)
     assert r1 < rg < r0
+    # grey on a view lattice: the bricks cost degree 0's, the lattice (64^3 vertices) is counted once
+    rv = memory_resolution(cfg.replace(sh_color="grey"), cells, 64, 64, 1, PIXELS)
+    view = 64 ** 3 * BYTES_PER_VERTEX
+    assert rg < rv <= r0
+    assert memory_at(rv, cells) + view <= cfg.max_memory_gib * 2 ** 30 < memory_at(rv + 16, cells) + view
     survey = dict(SURVEY, surface_cells=cells)
     assert resolution_bounds(cfg.replace(sh_degree=1), StepCost(1e-6, 64), 1e6, survey, PIXELS)["memory"] == r1
     # 'auto' picks degree 1 after a plan made at degree 0: the finer stages take the degree-1 bound

@@ -147,7 +147,7 @@ def test_packed_regularisers_match_the_tensor_formulas():
                            tv=(tv_density, tv_color),
                            density_hull=mi.Float(shaped),
                            integrator=SimpleNamespace(fields={"full": field}), neighbours={},
-                           state=SimpleNamespace(fields={"full": state}), adam=Adam({}))
+                           state=SimpleNamespace(fields={"full": state}), adam=Adam({}), view_onset=lambda: 0)
     subset = FieldFit.refit_elements(fake, field)
     vertices = np.flatnonzero(keep[b3:]) + b3  # the hull's, the empty brick left out
     # density and the mean colour: a refit leaves the view-dependent coefficients as they are

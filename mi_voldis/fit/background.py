@@ -79,9 +79,10 @@ def with_opacity(inputs, state, field, region, alpha):
     ``alpha`` per sample step of the fit (``state``'s, :func:`~mi_voldis.fit.fields.step_voxels`), their
     colour as it was."""
     raw = density_raw_for_alpha(alpha, voxel_of(field) * step_voxels(inputs.cfg, state), field.density_scale)
-    channel = dr.arange(mi.UInt32, dr.width(field.data)) % field.width
-    values = dr.select(dr.repeat(region, field.width) & (channel == 0), raw, field.data)
-    return field.with_data(values)
+    data = field.bricks_data()
+    channel = dr.arange(mi.UInt32, dr.width(data)) % field.width
+    values = dr.select(dr.repeat(region, field.width) & (channel == 0), raw, data)
+    return field.with_bricks(values)
 
 
 def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
@@ -155,10 +156,11 @@ def start_harmonic(inputs, state, depths=None):
     hull, points, obj, refill, solid = background_regions(inputs, state, neighbours, with_solid=True, depths=depths)
     region = dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull
     weights = fill_weights(inputs, full, points)
-    values = (hull_fill(full.data, full.width, region, hull, neighbours, weights) if inputs.cfg.hull_color_fill
-              else harmonic_fill(full.data, full.width, region, neighbours, weights=weights))
+    data = full.bricks_data()
+    values = (hull_fill(data, full.width, region, hull, neighbours, weights) if inputs.cfg.hull_color_fill
+              else harmonic_fill(data, full.width, region, neighbours, weights=weights))
     # the object itself: empty, its colour the fill's (:func:`emptied`)
-    filled = full.with_data(values)
+    filled = full.with_bricks(values)
     # the hole's colour is the mean: the 2D prior that paints it disagrees between views, and view dependence
     # fitted to that would show each view its own inpainting (refit_elements keeps it 0)
     state.fields["bg"] = without_view_dependence(emptied(inputs, state, filled, obj), hull)
@@ -318,13 +320,14 @@ def clear_empty_background_color(inputs, state, region=None):
     threshold = density_raw_for_alpha(inputs.cfg.empty_color_alpha, voxel_of(bg), bg.density_scale)
     raw = dr.gather(mi.Float, bg.data, dr.arange(mi.UInt32, bg.vertices) * bg.width)
     empty = ~dilate_vertices(raw >= threshold, neighbour_vertices(bg))
-    channel = dr.arange(mi.UInt32, dr.width(bg.data)) % bg.width
+    data = bg.bricks_data()
+    channel = dr.arange(mi.UInt32, dr.width(data)) % bg.width
     vertex_empty = dr.repeat(empty, bg.width)
-    values = dr.select(vertex_empty & (channel > 0) & (channel < MEAN_CHANNELS), EMPTY_COLOR, bg.data)
+    values = dr.select(vertex_empty & (channel > 0) & (channel < MEAN_CHANNELS), EMPTY_COLOR, data)
     values = dr.select(vertex_empty & (channel >= MEAN_CHANNELS), 0.0, values)
     if region is not None:
         values = dr.select(vertex_empty & dr.repeat(region, bg.width) & (channel == 0), EMPTY_DENSITY, values)
-    state.fields["bg"] = bg.with_data(values)
+    state.fields["bg"] = bg.with_bricks(values)
     return float(dr.mean(mi.Float(empty))[0])
 
 

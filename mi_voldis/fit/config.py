@@ -60,7 +60,7 @@ class FitConfig(Settings):
     ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
-             "sh_gate": False}
+             "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -176,6 +176,15 @@ class FitConfig(Settings):
                                      "scenes whose removal then loses (reports/notes.md)", low=0)
     sh_gate: bool = setting(True, "degree 1: view dependence in proportion to a voxel's opacity (radiance_field's "
                                   "sh_gate), so that faint density shows its mean colour from every side")
+    sh_view_resolution: int | None = setting(64, "grey degree 1: the gloss coefficients on a dense lattice of this "
+                                                 "many vertices along the box's longest side (radiance_field's "
+                                                 "view), the bricks keeping degree 0's 4 floats a vertex, so the "
+                                                 "memory plan affords degree 0's grid; null: at every brick vertex",
+                                             low=2)
+    sh_view_from: float = setting(0.5, "degree 1: view-dependent colour fitted only from this fraction of the full "
+                                       "phase's planned steps on, the geometry first fitted with the mean colour "
+                                       "(progressive view dependence, as 3D Gaussian splatting raises its degree); "
+                                       "0: from the start", low=0, high=1)
     sh_trial_steps: int = setting(200, "'auto': steps of each degree's trial fit (density and colour, at the end of "
                                        "the coarse stage)", low=1)
 

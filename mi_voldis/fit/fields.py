@@ -58,7 +58,8 @@ def init_fields(inputs, state, roles, sh_degree):
     raw = density_raw_for_alpha(cfg.density_init_alpha, step, scale)
     for r in roles:
         state.fields[r] = new_field(state.lo, state.hi, res, sh_degree, raw, scale, cfg.brick,
-                                    grey=cfg.sh_color == "grey", sh_gate=cfg.sh_gate)
+                                    grey=cfg.sh_color == "grey", sh_gate=cfg.sh_gate,
+                                    view_resolution=cfg.sh_view_resolution)
 
 
 def refine(inputs, state, integrator, roles, resolution, max_vertices=None, max_samples=None):

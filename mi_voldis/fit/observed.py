@@ -50,12 +50,14 @@ def view_rate_scale(space, field, cameras, power, quantile=1.0):
     """Float per packed value of ``field``: min(1, n / n_ref)^``power`` for the values of every vertex of
     a brick observed by n of ``cameras`` (:func:`brick_views`), n_ref the ``quantile`` of the counts of
     the bricks some camera observes (1: their largest); 0 for the empty brick and for bricks no camera
-    observes."""
+    observes; 1 for a view lattice's values."""
     counts = brick_views(space, field, cameras)
     seen = counts[1:][counts[1:] > 0]  # bricks outside every frustum (under the floor, behind the rig) step at 0
     ref = float(np.quantile(seen, quantile)) if len(seen) else 0.0
     scale = np.minimum(counts / ref, 1.0) ** power if ref > 0 else np.zeros_like(counts)
     scale[0] = 0.0
     per_slot = from_numpy(mi.Float, scale.astype(np.float32))
-    values = dr.arange(mi.UInt32, field.layout.slots * field.layout.vertices_per_brick * field.width)
-    return dr.gather(mi.Float, per_slot, values // (field.layout.vertices_per_brick * field.width))
+    per_brick = field.layout.vertices_per_brick * field.width
+    values = dr.arange(mi.UInt32, dr.width(field.data))
+    in_bricks = values < field.layout.slots * per_brick
+    return dr.select(in_bricks, dr.gather(mi.Float, per_slot, values // per_brick, in_bricks), 1.0)

@@ -38,14 +38,18 @@ class FieldFit:
     (``pool``: flat pixel indices to draw from), their updates masked to ``hull`` (a Float per stored
     vertex) when given, the density's to ``density_hull`` if given too; ``schedule``: follow the
     resolution schedule and start empty-space skipping; ``view_rates``: the learning rates per brick by
-    the training views that observe it (``lr_views``, :mod:`mi_voldis.fit.observed`)."""
+    the training views that observe it (``lr_views``, :mod:`mi_voldis.fit.observed`);
+    ``view_dependence_late``: view-dependent colour fitted from ``sh_view_from`` of the planned steps on
+    (:meth:`view_onset`)."""
 
     def __init__(self, inputs, state, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
-                 rates=None, tv=None, fit_exposure=False, prior=None, density_hull=None, view_rates=False):
+                 rates=None, tv=None, fit_exposure=False, prior=None, density_hull=None, view_rates=False,
+                 view_dependence_late=False):
         self.inputs, self.state, self.roles, self.layers, self.bank = inputs, state, roles, layers, bank
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
         self.density_hull = density_hull
         self.view_rates = view_rates and inputs.cfg.lr_views > 0
+        self.view_dependence_late = view_dependence_late
         # near-camera gradient scaling, r in world units (mi_voldis.render.march), in the full field's fit:
         # the background refit steps the object's region, away from the cameras, where it would only reweigh
         # the colour prior's views
@@ -107,6 +111,14 @@ class FieldFit:
             return mi.UInt32()
         return dr.repeat(vertices, MEAN_CHANNELS) * field.width + dr.tile(dr.arange(mi.UInt32, MEAN_CHANNELS),
                                                                           dr.width(vertices))
+
+    def view_onset(self):
+        """The step from which view-dependent colour is fitted: ``sh_view_from`` of the full phase's planned
+        steps in its fit (never before the plan), from the start in any other or without the setting."""
+        view_from = self.inputs.cfg.sh_view_from if self.view_dependence_late else 0.0
+        if not view_from:
+            return 0
+        return np.inf if self.state.steps_full is None else int(view_from * self.state.steps_full)
 
     def final_stage(self, role):
         """Whether the field of ``role`` is at the planned schedule's last resolution and ``lr_views_final``
@@ -215,7 +227,8 @@ class FieldFit:
     def extra_gradients(self, step, grads):
         """Regularisers on the packed grids (channel 0 density, then colour; padding untouched):
         sparsity on activated density, total variation every ``tv_every`` steps, and the hull mask; the
-        empty brick gets none."""
+        empty brick gets none, nor a view lattice. Before :meth:`view_onset` the view-dependent
+        coefficients get no gradient (they stay as they are, 0 in a new field)."""
         cfg = self.inputs.cfg
         tv = cfg.tv_every if step % cfg.tv_every == 0 else 0.0
         for r in self.roles:
@@ -223,7 +236,8 @@ class FieldFit:
             if key not in grads:
                 continue
             values = dr.detach(self.params[key])
-            vertices = dr.width(values) // f.width
+            vertices = f.layout.slots * f.layout.vertices_per_brick  # the bricks'; a view lattice's follow them
+            lattice = vertices * f.width
             subset = self.adam.subsets.get(key)  # inside the hull: the gradient at its elements alone
             if subset is not None and dr.width(subset) == 0:  # an empty hull: nothing to step
                 continue
@@ -244,9 +258,12 @@ class FieldFit:
                     dr.eval(g)  # every contribution of the backward pass in first (a resumed fit differed without)
                     dr.disable_grad(self.params[key])
                     g = add_tv_gradient(g, values, f.width, self.neighbours[r], weights)
-                g = g + dr.select(channel == 0, sparsity_gradient(values, cfg.sparsity / vertices), 0.0)
+                g = g + dr.select((channel == 0) & (index < lattice),
+                                  sparsity_gradient(values, cfg.sparsity / vertices), 0.0)
                 # the empty brick (slot 0) stands for every unallocated brick: it never changes
                 g = dr.select(index < f.layout.vertices_per_brick * f.width, 0.0, g)
+                if step < self.view_onset():  # progressive view dependence: the mean colour first
+                    g = dr.select((index >= lattice) | (channel >= MEAN_CHANNELS), 0.0, g)
             else:
                 g = dr.gather(mi.Float, grads[key], subset)
                 own = dr.gather(mi.Float, values, subset)
@@ -254,9 +271,9 @@ class FieldFit:
                 if weights is not None:
                     weight = dr.gather(mi.Float, from_numpy(mi.Float, weights), channel)
                     g = g + weight * tv_gradient(values, f.width, self.neighbours[r], subset)
-            if self.hull is not None:  # refit only inside the hull (a weight per vertex)
+            if self.hull is not None:  # refit only inside the hull (a weight per brick vertex; a view lattice stays)
                 vertex = index // f.width
-                g = g * dr.gather(mi.Float, self.hull, vertex)
+                g = g * dr.gather(mi.Float, self.hull, vertex, index < lattice)
                 if self.density_hull is not None:
                     g = dr.select(channel == 0, g * dr.gather(mi.Float, self.density_hull, vertex), g)
             grads[key] = g

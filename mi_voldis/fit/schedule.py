@@ -248,23 +248,36 @@ BYTES_PER_VERTEX = 272
 VERTICES_PER_SURFACE_CELL = 64
 
 
-def memory_scale(sh_degree, grey=False):
+def memory_scale(sh_degree, grey=False, view=False):
     """How much more memory a vertex takes at colour ``sh_degree`` (0, 1 or 'auto', which starts at 0; grey
-    view dependence where ``grey``) than BYTES_PER_VERTEX, measured at degree 0: its packed floats over degree
-    0's (4; degree 1: 16, 8 grey). Measured on
+    view dependence where ``grey``, on a view lattice where ``view``: the bricks then keep degree 0's floats)
+    than BYTES_PER_VERTEX, measured at degree 0: its packed floats over degree 0's (4; degree 1: 16, 8 grey).
+    Measured on
     fern: 7.0 GiB of peak RSS at degree 1 and 336^3 against 1.7 GiB at degree 0 and 304^3, 3.3 times as much
     per vertex (reports/notes.md)."""
     from ..grid import packet_width
     from ..plugins.radiance_field import color_channels
     degree = 0 if sh_degree == "auto" else int(sh_degree)
+    if degree == 1 and grey and view:
+        return 1.0
     return packet_width(1 + color_channels(degree, grey)) / packet_width(4)
 
 
+def view_lattice_vertices(cfg, sh_degree):
+    """Vertices of the view lattice a field of ``sh_degree`` gets under ``cfg`` (grey degree 1 with
+    ``sh_view_resolution``), at most: the resolution cubed; 0 without one."""
+    if sh_degree == "auto" or int(sh_degree) != 1 or cfg.sh_color != "grey" or not cfg.sh_view_resolution:
+        return 0
+    return cfg.sh_view_resolution ** 3
+
+
 def affordable_vertices(cfg, pixels, sh_degree):
-    """Stored vertices a fit can hold within ``max_memory_gib``: what the base of ``pixels`` training pixels
-    leaves, at BYTES_PER_VERTEX memory_scale(``sh_degree``, ``sh_color``) bytes each (0 when nothing is left)."""
-    free = cfg.max_memory_gib * 2 ** 30 - BASE_BYTES - BYTES_PER_PIXEL * pixels
-    return max(0.0, free / (BYTES_PER_VERTEX * memory_scale(sh_degree, cfg.sh_color == "grey")))
+    """Stored brick vertices a fit can hold within ``max_memory_gib``: what the base of ``pixels`` training
+    pixels and a view lattice (its vertices at BYTES_PER_VERTEX each: 4 floats, as a degree-0 vertex) leave,
+    at BYTES_PER_VERTEX memory_scale(``sh_degree``, ``sh_color``) bytes each (0 when nothing is left)."""
+    view = view_lattice_vertices(cfg, sh_degree)
+    free = cfg.max_memory_gib * 2 ** 30 - BASE_BYTES - BYTES_PER_PIXEL * pixels - BYTES_PER_VERTEX * view
+    return max(0.0, free / (BYTES_PER_VERTEX * memory_scale(sh_degree, cfg.sh_color == "grey", view > 0)))
 
 
 def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree, pixels):

@@ -38,7 +38,7 @@ def choose_sh_degree(inputs, state, roles):
     scores = {}
     for degree in (0, 1):
         for r in roles:
-            state.fields[r] = with_sh_degree(kept[r], degree, grey)
+            state.fields[r] = with_sh_degree(kept[r], degree, grey, cfg.sh_view_resolution)
         adam = Adam({}, cfg.adam_beta1, cfg.adam_beta2, warmup=cfg.lr_warmup)
         trial = FieldFit(inputs, state, roles, ("full",), fit_bank, phase=10 + degree, schedule=False, adam=adam,
                          rates=(cfg.lr_density * decay, cfg.lr_color * decay))
@@ -50,7 +50,7 @@ def choose_sh_degree(inputs, state, roles):
                                              ds.images[v]) for v in val]))
     degree = int(scores[1] - scores[0] >= cfg.sh_gain_db)
     for r in roles:  # back to the main fit's fields, at the chosen degree
-        state.fields[r] = with_sh_degree(kept[r], degree, grey)
+        state.fields[r] = with_sh_degree(kept[r], degree, grey, cfg.sh_view_resolution)
     state.sh_choice = {"val_psnr_degree0": scores[0], "val_psnr_degree1": scores[1], "degree": degree,
                        "val_views": val.tolist(), "trial_steps": cfg.sh_trial_steps}
     return degree

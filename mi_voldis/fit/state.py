@@ -63,6 +63,8 @@ class FitState:
             arrays[f"{r}/to_world"] = s.to_world
             arrays[f"{r}/density_scale"] = np.array(s.density_scale)
             arrays[f"{r}/sh_gate"] = np.array(s.sh_gate)
+            if s.view_shape is not None:
+                arrays[f"{r}/view_shape"] = np.array(s.view_shape)
         adam_arrays, meta["adam_t"] = self.adam.state()
         arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
         if self.hull_points is not None:
@@ -89,9 +91,11 @@ class FitState:
             if f"{r}/table" in arrays:
                 layout = Layout(tuple(int(v) for v in arrays[f"{r}/shape"]), int(arrays[f"{r}/brick"]),
                                 arrays[f"{r}/table"])
+                view = arrays.get(f"{r}/view_shape")
                 fields[r] = FieldState(layout, from_numpy(mi.Float, arrays[f"{r}/data"]), int(arrays[f"{r}/channels"]),
                                        arrays[f"{r}/to_world"], float(arrays[f"{r}/density_scale"]),
-                                       bool(arrays.get(f"{r}/sh_gate", False)))  # absent: saved before the gate
+                                       bool(arrays.get(f"{r}/sh_gate", False)),  # absent: saved before the gate
+                                       None if view is None else tuple(int(v) for v in view))
         adam.load({k[5:]: v for k, v in arrays.items() if k.startswith("adam/")}, meta["adam_t"])
         exposure = from_numpy(mi.Float, arrays["exposure"]) if "exposure" in arrays else None
         occupancy = Occupancy(arrays["occupancy/lo"], arrays["occupancy/hi"], arrays["occupancy/cells"],

@@ -229,7 +229,8 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
         state.schedule, state.steps_full = cfg.resolution_schedule, cfg.steps_full
     if state.schedule is None:
         state.schedule = [[0, coarse_resolution(cfg)]]  # the coarse stage, until planned
-    problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True, view_rates=True)
+    problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True, view_rates=True,
+                       view_dependence_late=True)
     problem.on_stage = lambda step: replan(state, step)
     eval_fn = held_out_psnr(inputs, problem)
     common = dict(log=state.log, checkpoint=checkpoint(problem), **checkpoints(cfg), eval_fn=eval_fn,
@@ -278,8 +279,9 @@ def cap_for_sh_degree(inputs, state, degree, step):
     (:func:`memory_resolution`) take that bound instead, a stage that would repeat the one before it is
     dropped, and the plan records the cap. The default plan (costed at the reference speed) then costs its
     steps at ``degree``: a step's kernels move vertices of ``memory_scale`` times degree 0's floats, so
-    they cost that much more (``plan['kernel_scale']``, which :func:`plan_cost` applies from then on), and
-    the seconds the plan gave the steps from ``step`` on buy that many fewer."""
+    they cost that much more (``plan['kernel_scale']``, which :func:`plan_cost` applies from then on; on a
+    view lattice too, whose second lookup costs about what the wider vertices would), and the seconds the
+    plan gave the steps from ``step`` on buy that many fewer."""
     cfg, plan = inputs.cfg, state.plan or {}
     if cfg.resolution != "auto" or "surface_cells" not in plan:
         return

@@ -36,16 +36,19 @@ def save_field(directory, stem, density, color, to_world, density_scale=1.0, sh_
             f'{_transform("to_world", to_world)}')
 
 
-def save_grid(directory, stem, layout, values, to_world, density_scale=1.0, sh_gate=False):
+def save_grid(directory, stem, layout, values, to_world, density_scale=1.0, sh_gate=False, view=None):
     """Write ``<stem>_grid.npz``, a brick grid (:mod:`mi_voldis.bricks`: its ``table``, the allocated
-    bricks' raw ``values`` (bricks * B^3, channels), ``vertices`` and the box as ``bbox``), and return
-    the ``<medium>`` XML body for it. Written to a temporary file and renamed."""
+    bricks' raw ``values`` (bricks * B^3, channels), ``vertices``, the box as ``bbox`` and the view
+    lattice ``view`` (Z, Y, X, 3) where given), and return the ``<medium>`` XML body for it. Written to a
+    temporary file and renamed."""
     to_world = np.asarray(to_world, dtype=np.float64)
     corners = np.array([[x, y, z, 1.0] for x in (0, 1) for y in (0, 1) for z in (0, 1)]) @ to_world.T
     name = f"{stem}_grid.npz"
     tmp = os.path.join(directory, name + ".tmp.npz")
+    extra = {} if view is None else {"view": np.asarray(view, np.float32)}
     np.savez(tmp, table=layout.table, data=np.asarray(values, np.float32), vertices=np.array(layout.shape),
-             brick=np.array(layout.brick), bbox=np.stack([corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)]))
+             brick=np.array(layout.brick), bbox=np.stack([corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)]),
+             **extra)
     os.replace(tmp, os.path.join(directory, name))
     return (f'<string name="grid" value={quoteattr(name)}/>'
             f'{_activation(density_scale, sh_gate)}'

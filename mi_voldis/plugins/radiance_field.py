@@ -70,6 +70,15 @@ class RadianceField(mi.Medium):
          a ``.vol`` header has it). In memory: the tensors ``table`` and ``data`` and the vector
          ``vertices``. |exposed| ``data``, |differentiable| (the packed values, empty brick first).
 
+     * - view
+       - |tensor|
+       - With a brick grid of RGB colour: grey degree-1 view dependence on a dense lattice of its own over
+         the same box, a tensor (Z', Y', X', 3) of the coefficients of Y_1^-1, Y_1^0 and Y_1^1 (in a grid
+         file its array ``view``; with the packed ``data`` of a field state, ``view_vertices`` (X', Y', Z')
+         and the lattice's vertices after the bricks'). The field is then of degree 1, grey (below).
+         (Default: none)
+       - |exposed|, |differentiable| (in ``data``)
+
      * - to_world
        - |transform|
        - Maps the unit cube [0, 1]^3 onto the field's box. (Default: the bounding box stored in the
@@ -103,6 +112,14 @@ class RadianceField(mi.Medium):
     is one scalar added to all three logits: a gloss that brightens or darkens a surface with the view
     (a varnished top that mirrors the sky) at half a degree-1 vertex's memory (8 floats against 16).
 
+    With a ``view`` lattice the gloss coefficients are not stored at the brick vertices but on a dense
+    lattice of their own, C_k(p) = V_k(p), k = 1..3, the trilinear interpolant of the view lattice at p. A
+    gloss varies slowly in space (it follows the light and the material, not the texture), so a lattice
+    of 64^3 carries it (measured in ``reports/notes.md``) while the bricks, which carry density and the
+    mean colour at the finest pitch, keep degree 0's 4 floats a vertex. Packed, a view vertex sits after
+    the bricks' vertices with its three coefficients where a brick vertex has its RGB (the density slot
+    unused, 0).
+
     With ``sh_gate`` every term k >= 1 is scaled by g(p) = 1 - exp(-sigma(p) h), the opacity of the
     density over the grid's largest voxel edge h: 1 on a surface, sigma h on a haze that light crosses.
     No gradient flows to the density through g (it is held constant in the derivative): a faint voxel
@@ -130,12 +147,18 @@ class RadianceField(mi.Medium):
     def __init__(self, props):
         super().__init__(props)
         name = props.id() or "radiance_field"
-        self.layout = None
+        self.layout, self.view_shape = None, None
         if "grid" in props or "table" in props:
-            self.layout, self._data, self.channels, bbox = _load_bricks(props, name)
+            self.layout, self._data, self.channels, bbox, self.view_shape = _load_bricks(props, name)
             self._check_channels(self.channels - 1)
+            if self.view_shape is not None and self.channels != 4:
+                raise ValueError(f"{name}: a view lattice needs RGB colour at the brick vertices (3 channels), "
+                                 f"got {self.channels - 1}")
             self._density = self._color = None
         else:
+            if "view" in props or "view_vertices" in props:
+                raise ValueError(f"{name}: a view lattice needs a brick grid ('grid' or 'table'), not dense "
+                                 f"'density' and 'color'")
             density, bbox = _load_grid(props, "density", name)
             color, _ = _load_grid(props, "color", name)
             self._density, self._color = density, color
@@ -170,7 +193,7 @@ class RadianceField(mi.Medium):
     def parameters_changed(self, keys=None):
         if self.layout is not None:
             data = self._data
-            rows, width = self.layout.slots * self.layout.vertices_per_brick, grid.packet_width(self.channels)
+            rows, width = self.rows, grid.packet_width(self.channels)
             if tuple(data.shape) != (rows, width):
                 raise ValueError(f"radiance_field: brick data must have shape ({rows}, {width}), got "
                                  f"{tuple(data.shape)}")
@@ -195,7 +218,18 @@ class RadianceField(mi.Medium):
         if colour not in COLOR_LAYOUTS:
             raise ValueError(f"radiance_field: color needs 3, 6, 12 or 27 channels (RGB, SH degree 1 grey, "
                              f"SH degree 1/2), got {colour}")
-        self.sh_degree, self.grey = COLOR_LAYOUTS[colour]
+        self.sh_degree, self.grey = (1, True) if self.view_shape is not None else COLOR_LAYOUTS[colour]
+
+    @property
+    def rows(self):
+        """Packed vertices: the bricks' (empty brick first), then the view lattice's."""
+        bricks_rows = self.layout.slots * self.layout.vertices_per_brick
+        return bricks_rows + (0 if self.view_shape is None else int(np.prod(self.view_shape)))
+
+    @property
+    def lookup_channels(self):
+        """Values :meth:`lookup` returns: density, the colour coefficients and the view lattice's three."""
+        return self.channels + (0 if self.view_shape is None else 3)
 
     # ------------------------------------------------------------ values: tensors or packed
     density = _unpacked_tensor("_density", "Raw density tensor (Z, Y, X, 1).")
@@ -216,8 +250,7 @@ class RadianceField(mi.Medium):
 
         Fitting optimises this array directly, so that a step neither packs the two tensors nor
         unpacks their gradients; ``density`` and ``color`` are unpacked from it when next read."""
-        vertices = self.layout.slots * self.layout.vertices_per_brick if self.layout is not None else \
-            self.shape[0] * self.shape[1] * self.shape[2]
+        vertices = self.rows if self.layout is not None else self.shape[0] * self.shape[1] * self.shape[2]
         expected = vertices * self.width
         if dr.width(packed) != expected:
             raise ValueError(f"radiance_field: packed grid needs {expected} values, got {dr.width(packed)}")
@@ -242,6 +275,8 @@ class RadianceField(mi.Medium):
 
     def to_string(self):
         kind = f"bricks={self.layout.allocated}/{self.layout.table.size}, " if self.layout is not None else ""
+        if self.view_shape is not None:
+            kind += f"view={self.view_shape}, "
         return (f"RadianceField[shape={self.shape}, {kind}sh_degree={self.sh_degree}, "
                 f"density_scale={self.density_scale}, sh_gate={self.sh_gate}, to_world={self.to_world.tolist()}]")
 
@@ -256,11 +291,15 @@ class RadianceField(mi.Medium):
         return self.activate(self.lookup(p, data, inside), d, inside)
 
     def lookup(self, p, data=None, active=True):
-        """Raw values at local points ``p`` (clamped to the unit cube): the ``channels`` interpolated
-        grid channels, density first (Float arrays)."""
+        """Raw values at local points ``p`` (clamped to the unit cube): the ``lookup_channels``
+        interpolated grid channels, density first (Float arrays)."""
         data = self.packed if data is None else data
         if self.layout is not None:
-            return bricks.trilinear(data, self.layout, self.width, self.channels, p, active)
+            out = bricks.trilinear(data, self.layout, self.width, self.channels, p, active)
+            if self.view_shape is not None:  # the gloss coefficients, in the RGB slots of the view vertices
+                offset = self.layout.slots * self.layout.vertices_per_brick
+                out += grid.trilinear(data, self.view_shape, self.width, 4, p, active, offset)[1:]
+            return out
         return grid.trilinear(data, self.shape, self.width, self.channels, p, active)
 
     def density_points(self, raw_threshold):
@@ -369,17 +408,19 @@ mi.register_medium("radiance_field", lambda props: RadianceField(props))
 
 
 def _load_bricks(props, name):
-    """(Layout, packed data tensor (slots * B^3, width) with the empty brick first, channels, bbox or
-    None) of a brick grid given as a ``grid`` file or as ``table`` / ``data`` / ``vertices`` /
-    ``brick`` properties (``data`` either the allocated bricks' values, or with ``channels`` the packed
-    array itself, empty brick included, as a field state holds it)."""
-    bbox = None
+    """(Layout, packed data tensor (slots * B^3 + view vertices, width) with the empty brick first,
+    channels, bbox or None, view lattice's (X, Y, Z) or None) of a brick grid given as a ``grid`` file
+    or as ``table`` / ``data`` / ``vertices`` / ``brick`` (/ ``view``) properties (``data`` either the
+    allocated bricks' values, or with ``channels`` (and ``view_vertices``) the packed array itself,
+    empty brick included, as a field state holds it)."""
+    bbox, view = None, None
     if "grid" in props:
         path = str(mi.file_resolver().resolve(props.get("grid")))
         try:
             with np.load(path) as f:
                 table, data, vertices, brick = f["table"], f["data"], f["vertices"], int(f["brick"])
                 bbox = np.asarray(f["bbox"], np.float64) if "bbox" in f.files else None
+                view = np.asarray(f["view"], np.float32) if "view" in f.files else None
         except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as e:
             raise ValueError(f"{path}: not a brick grid file ({e})") from None
         if bbox is not None:
@@ -392,6 +433,7 @@ def _load_bricks(props, name):
                 raise ValueError(f"{name}: a brick grid needs 'table', 'data', 'vertices' and 'brick'")
         table, data = np.array(props.get("table")), props.get("data")
         vertices, brick = np.array(props.get("vertices"), np.float64), int(props.get("brick"))
+        view = np.array(props.get("view"), np.float32) if "view" in props else None
         path = name
     shape = tuple(int(v) for v in np.ravel(vertices))
     if len(shape) != 3:
@@ -403,10 +445,13 @@ def _load_bricks(props, name):
         raise ValueError(f"{path}: {e}") from None
     b3 = brick ** 3
     rows, cols = tuple(data.shape) if len(data.shape) == 2 else (-1, -1)
-    if "channels" in props and rows == layout.slots * b3 and cols == grid.packet_width(int(props.get("channels"))):
+    view_shape = _view_shape(path, props, view)
+    view_rows = 0 if view_shape is None else int(np.prod(view_shape))
+    if "channels" in props and rows == layout.slots * b3 + view_rows and \
+            cols == grid.packet_width(int(props.get("channels"))):
         if not dr.all(dr.isfinite(data.array)):
             raise ValueError(f"{path}: brick data contains NaN or Inf values")
-        return layout, data, int(props.get("channels")), bbox  # the packed array itself
+        return layout, data, int(props.get("channels")), bbox, view_shape  # the packed array itself
     if rows != layout.allocated * b3 or cols < 4:
         raise ValueError(f"{path}: brick data must hold {layout.allocated} bricks of {b3} vertices x channels, "
                          f"got shape {tuple(data.shape)}")
@@ -414,7 +459,28 @@ def _load_bricks(props, name):
     if not np.all(np.isfinite(data)):
         raise ValueError(f"{path}: brick data contains NaN or Inf values")
     width = grid.packet_width(cols)
-    values = np.zeros((layout.slots * b3, width), np.float32)
+    values = np.zeros((layout.slots * b3 + view_rows, width), np.float32)
     values[:b3] = bricks.empty_values(width, cols)
-    values[b3:, :cols] = data
-    return layout, mi.TensorXf(values), cols, bbox
+    values[b3:layout.slots * b3, :cols] = data
+    if view is not None:
+        values[layout.slots * b3:, 1:4] = view.reshape(-1, 3)
+    return layout, mi.TensorXf(values), cols, bbox, view_shape
+
+
+def _view_shape(path, props, view):
+    """The view lattice's vertices (X, Y, Z) from its coefficients ``view`` (Z, Y, X, 3) or the packed
+    form's ``view_vertices``; None without one. A lattice of another shape, under 2 vertices an axis or
+    with values not finite is refused naming ``path``."""
+    if view is None and "view_vertices" not in props:
+        return None
+    if view is not None:
+        if view.ndim != 4 or view.shape[3] != 3:
+            raise ValueError(f"{path}: the view lattice must have shape (Z, Y, X, 3), got {view.shape}")
+        if not np.all(np.isfinite(view)):
+            raise ValueError(f"{path}: the view lattice contains NaN or Inf values")
+        shape = tuple(int(v) for v in view.shape[2::-1])
+    else:
+        shape = tuple(int(v) for v in np.ravel(np.array(props.get("view_vertices"))))
+    if len(shape) != 3 or min(shape) < 2:
+        raise ValueError(f"{path}: the view lattice needs at least 2 vertices per axis, got {shape}")
+    return shape

@@ -55,6 +55,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..grid import packet_width
 from ..transforms import apply_point, apply_vector
 from . import mixing, quadrature
 from .intervals import sample_interval
@@ -271,28 +272,28 @@ class Record:
         self.rays = rays
         self.index = dr.arange(mi.UInt32, rays)
         self.fields = {lk.key: lk.field for lk in plan.lookups}
-        self.buffers = {key: dr.empty(mi.Float, f.width * rays * samples) for key, f in self.fields.items()}
+        self.widths = {key: packet_width(f.lookup_channels) for key, f in self.fields.items()}
+        self.buffers = {key: dr.empty(mi.Float, self.widths[key] * rays * samples) for key in self.fields}
         dr.eval(self.buffers)
 
     @staticmethod
     def size(plan, rays, samples):
         """Bytes a record of ``rays`` rays and ``samples`` samples per ray takes."""
-        return 4 * rays * samples * sum(lk.field.width for lk in plan.lookups)
+        return 4 * rays * samples * sum(packet_width(lk.field.lookup_channels) for lk in plan.lookups)
 
     def _slot(self, i):
         return i * self.rays + self.index
 
     def write(self, i, lookups, active):
         for key, buf in self.buffers.items():
-            v = list(lookups[key]) + [mi.Float(0.0)] * (self.fields[key].width - len(lookups[key]))
+            v = list(lookups[key]) + [mi.Float(0.0)] * (self.widths[key] - len(lookups[key]))
             dr.scatter(buf, mi.ArrayXf(v), self._slot(i), active)
 
     def read(self, i, active):
         out = {}
         for key, buf in self.buffers.items():
-            f = self.fields[key]
-            v = dr.gather(mi.ArrayXf, buf, self._slot(i), active, shape=(f.width, self.rays))
-            out[key] = [v[k] for k in range(f.channels)]
+            v = dr.gather(mi.ArrayXf, buf, self._slot(i), active, shape=(self.widths[key], self.rays))
+            out[key] = [v[k] for k in range(self.fields[key].lookup_channels)]
         return out
 
 
