@@ -275,23 +275,24 @@ def with_sh_degree(state, degree, grey=False, view_resolution=None):
 def without_view_dependence(state, region):
     """``state`` with the view-dependent coefficients (every channel after the mean colour) of the vertices in
     ``region`` (Float or Bool per stored brick vertex) set to 0: there the colour is the mean, from every
-    view. On a view lattice: the coefficients of every view vertex of a cell that holds a vertex in ``region``."""
+    view. On a view lattice: the coefficients of the view vertices where the trilinear interpolant of
+    ``region`` (1 inside, 0 outside and in unallocated bricks) is at least 1/2, i.e. the view vertices
+    inside it to within half a brick voxel. A view cell is several brick voxels wide, so clearing every
+    view vertex of a cell the region touches would also take the gloss off the surfaces around it, which
+    a refit masked to the region never gives back."""
     if state.sh_degree == 0:
         return state
     if state.view_shape is not None:
-        local, real = vertex_local(state)
-        inside = real & (mi.Float(region) > 0)
+        _, real = vertex_local(state)
+        inside = dr.select(real & (mi.Float(region) > 0), 1.0, 0.0)
         sx, sy, sz = state.view_shape
-        x = dr.clip(local, 0.0, 1.0) * mi.Vector3f(sx - 1, sy - 1, sz - 1)
-        i = dr.minimum(mi.Vector3u(mi.Vector3i(x)), mi.Vector3u(sx - 2, sy - 2, sz - 2))
-        marked = dr.zeros(mi.Float, state.view_vertices)
-        for dz in (0, 1):
-            for dy in (0, 1):
-                for dx in (0, 1):
-                    dr.scatter(marked, 1.0, ((i.z + dz) * sy + i.y + dy) * sx + i.x + dx, inside)
+        v = dr.arange(mi.UInt32, state.view_vertices)
+        p = mi.Point3f(mi.Float(v % sx) / (sx - 1), mi.Float(v // sx % sy) / (sy - 1),
+                       mi.Float(v // (sx * sy)) / (sz - 1))
+        marked = bricks.trilinear(inside, state.layout, 1, 1, p)[0] >= 0.5
         view = dr.arange(mi.UInt32, state.view_vertices * state.width)
         old = dr.gather(mi.Float, state.data, view + state.vertices * state.width)
-        cleared = dr.select(dr.gather(mi.Float, marked, view // state.width) > 0, 0.0, old)
+        cleared = dr.select(dr.gather(mi.Bool, marked, view // state.width), 0.0, old)
         return state.with_data(_with_view_rows(state.bricks_data(), state, cleared))
     i = dr.arange(mi.UInt32, dr.width(state.data))
     inside = mi.Bool(dr.gather(mi.Float, mi.Float(region), i // state.width) > 0)

@@ -548,14 +548,14 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
 
 
 def test_degree_one_chosen_in_a_default_plan_costs_its_steps_at_degree_one():
-    """A default plan (costed at the reference speed) that 'auto' turns to grey degree-1 colour at step 300:
-    the seconds it gave the steps ahead (at degree 0's cost) buy steps whose kernels cost memory_scale (2)
-    times as much, and the plan's cost says so from then on."""
+    """A default plan (costed at the reference speed) that 'auto' turns to grey degree-1 colour at every
+    vertex at step 300: the seconds it gave the steps ahead (at degree 0's cost) buy steps whose kernels
+    cost memory_scale (2) times as much, and the plan's cost says so from then on."""
     from types import SimpleNamespace
 
     from mi_voldis.fit.schedule import cost_ahead, memory_scale, plan_cost
     from mi_voldis.fit.train import cap_for_sh_degree
-    cfg = FitConfig().for_backend("llvm").replace(sh_color="grey")
+    cfg = FitConfig().for_backend("llvm").replace(sh_color="grey", sh_view_resolution=None)
     assert memory_scale(1, grey=True) == 2.0
     plan = {"surface_cells": 10.0, "surface_resolution": 64, "reference_msps": 18.0, "coarse_step_seconds": 0.04,
             "host_ms": 0.0, "step_voxels": 0.5}
@@ -571,6 +571,44 @@ def test_degree_one_chosen_in_a_default_plan_costs_its_steps_at_degree_one():
     assert after == pytest.approx(before, rel=2e-3)  # the same seconds (to a step's rounding) ...
     assert state.steps_full - 300 == pytest.approx((steps - 300) / 2, abs=2)  # ... for half the steps
     assert state.plan["rescaled"] == [[300, state.steps_full]]
+
+def test_a_view_lattice_costs_its_steps_from_the_onset_on():
+    """Grey degree 1 on a view lattice: the steps before ``sh_view_from`` cost degree 0's (the all-0 lattice
+    is not read), those after VIEW_STEP_COST times as much; averaged over the steps from ``start`` on. A
+    plan made at degree 1 records that scale, and its steps cost it: the budget buys 1 / scale of degree 0's
+    steps on the same grids. 'auto' turning to it at step 300 of 3000 costs the steps ahead the same way."""
+    from types import SimpleNamespace
+
+    from mi_voldis.fit.schedule import VIEW_STEP_COST, cost_ahead, degree_cost_scale, plan_cost
+    from mi_voldis.fit.train import cap_for_sh_degree
+    grey = FitConfig().for_backend("llvm").replace(sh_color="grey", sh_view_from=0.5)
+    k = VIEW_STEP_COST
+    assert degree_cost_scale(grey, 1) == pytest.approx(0.5 + 0.5 * k)
+    assert degree_cost_scale(grey, 1, 0.1) == pytest.approx((0.4 + 0.5 * k) / 0.9)
+    assert degree_cost_scale(grey, 1, 0.6) == degree_cost_scale(grey.replace(sh_view_from=0.0), 1) == k
+    assert degree_cost_scale(grey, 0) == degree_cost_scale(grey, "auto") == 1.0
+    assert degree_cost_scale(grey.replace(sh_view_resolution=None), 1) == 2.0  # harmonics at every vertex
+    assert degree_cost_scale(grey.replace(sh_color="rgb"), 1) == 4.0
+    cfg = grey.replace(resolution=256, min_steps=0)
+    samples = 0.01 * cfg.reference_msps * 1e6
+    zero = planned(cfg.replace(sh_degree=0), calibrated(0.01, samples))
+    one = planned(cfg.replace(sh_degree=1), calibrated(0.01, samples))
+    assert "kernel_scale" not in zero.plan and one.plan["kernel_scale"] == pytest.approx(0.5 + 0.5 * k)
+    assert "kernel_scale" not in planned(cfg.replace(sh_degree=1, sh_view_resolution=None),
+                                         calibrated(0.01, samples)).plan  # as before: costed at degree 0
+    assert [r for _, r in one.schedule] == [r for _, r in zero.schedule]
+    assert one.steps_full == pytest.approx(zero.steps_full / (0.5 + 0.5 * k), rel=2e-3)
+    plan = {"surface_cells": 10.0, "surface_resolution": 64, "reference_msps": 18.0, "coarse_step_seconds": 0.04,
+            "host_ms": 0.0, "step_voxels": 0.5}
+    schedule, steps = [[0, 64], [300, 128], [600, 192]], 3000
+    state = SimpleNamespace(plan=dict(plan), schedule=[list(s) for s in schedule], steps_full=steps)
+    inputs = SimpleNamespace(cfg=grey, bank=SimpleNamespace(pixels=PIXELS), ds=SimpleNamespace(masks=None))
+    before = cost_ahead(schedule, steps, 300, plan_cost(plan, 64))
+    cap_for_sh_degree(inputs, state, 1, 300)
+    assert state.plan["kernel_scale"] == pytest.approx((0.4 + 0.5 * k) / 0.9)
+    assert cost_ahead(state.schedule, state.steps_full, 300, plan_cost(state.plan, 64)) == pytest.approx(before,
+                                                                                                         rel=2e-3)
+
 
 def test_a_step_of_more_voxels_costs_the_samples_share_less_on_the_finer_stages():
     """step_factor: the samples' share SAMPLE_SHARE of a half-voxel step scales with 0.5 / step, the rest

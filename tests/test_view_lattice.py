@@ -172,7 +172,7 @@ def test_a_view_lattice_needs_rgb_bricks_and_a_brick_grid(tmp_path):
         mi.load_dict({"type": "radiance_field", "grid": str(tmp_path / "bad_grid.npz")})
 
 
-def test_clearing_view_dependence_clears_the_view_cells_a_region_touches():
+def test_clearing_view_dependence_clears_the_view_vertices_inside_a_region_and_no_others():
     values = random_values((17, 17, 17), 4, seed=16)
     layout, data = bricks.from_dense(values, 8)
     state = field_state.with_sh_degree(field_state.FieldState(layout, mi.Float(data), 4, UNIT_BOX), 1, True, 5)
@@ -180,12 +180,23 @@ def test_clearing_view_dependence_clears_the_view_cells_a_region_touches():
                                       state.data))
     local, real = field_state.vertex_local(state)
     x = np.array(local)
-    region = real & mi.Bool(np.all(x < 0.2, axis=0))  # the corner x, y, z < 0.2: view cells [0, 1) of 4
-    out = field_state.without_view_dependence(state, region)
-    view = out.view_values()[..., 0]  # (Z, Y, X)
-    assert (view[:2, :2, :2] == 0).all()  # the corners of the one cell the region lies in
-    assert view.sum() == 125 - 8 and (out.view_values()[..., 1:] == out.view_values()[..., :1]).all()
-    np.testing.assert_array_equal(np.array(out.bricks_data()), np.array(state.bricks_data()))
+
+    def cleared(region):
+        out = field_state.without_view_dependence(state, real & mi.Bool(region))
+        np.testing.assert_array_equal(np.array(out.bricks_data()), np.array(state.bricks_data()))
+        view = out.view_values()  # (Z, Y, X, 3): 1 where kept
+        assert (view[..., 1:] == view[..., :1]).all()
+        return view[..., 0] == 0
+
+    # brick vertices 0..4 of 16 along each axis (x <= 0.25): view vertices 0 and 0.25 of 0, 0.25, ..., 1
+    corner = cleared(np.all(x < 0.3, axis=0))
+    expected = np.zeros((5, 5, 5), bool)
+    expected[:2, :2, :2] = True
+    np.testing.assert_array_equal(corner, expected)
+    # x, y, z in [0.3, 0.45]: inside one view cell, on no view vertex; the view vertices around it keep their gloss
+    assert not cleared(np.all((x > 0.3) & (x < 0.45), axis=0)).any()
+    # brick vertices 0..3 (x < 0.2): view vertex 0.25 is brick vertex 4, outside the region, and keeps its gloss
+    np.testing.assert_array_equal(cleared(np.all(x < 0.2, axis=0)), np.pad(np.ones((1, 1, 1), bool), (0, 4)))
 
 
 def test_the_memory_plan_counts_a_view_lattice_once_and_bricks_at_degree_zero():
@@ -197,3 +208,44 @@ def test_the_memory_plan_counts_a_view_lattice_once_and_bricks_at_degree_zero():
     assert affordable_vertices(grey.replace(sh_view_resolution=None), 10 ** 6, 1) == pytest.approx(zero / 2)
     assert affordable_vertices(grey.replace(sh_color="rgb"), 10 ** 6, 1) == pytest.approx(zero / 4)
     assert BYTES_PER_VERTEX > 0
+
+
+def test_an_all_zero_view_lattice_is_not_read_and_changes_nothing():
+    """Before progressive view dependence's onset fitting turns the lattice's lookups off
+    (``view_enabled``), which :func:`~mi_voldis.fit.problem.view_lattice_zero` allows: an all-0 lattice's
+    lookups add 0. The switch gives the same values there, and the gloss-free mean where the lattice holds
+    a gloss."""
+    from mi_voldis.fit.problem import view_lattice_zero
+    values = random_values((9, 9, 9), 4, seed=17)
+    p = mi.Point3f(*np.random.default_rng(18).uniform(0, 1, (3, 300)))
+    d = directions(300, 19)
+    zero = mi.load_dict(view_field(values, np.zeros((3, 4, 5, 3), np.float32)))
+    glossy = mi.load_dict(view_field(values, random_values((3, 4, 5), 3, seed=20)))
+    assert view_lattice_zero(zero) and not view_lattice_zero(glossy)
+    assert not view_lattice_zero(mi.load_dict(brick_field_dict(values[..., :1], values[..., 1:], UNIT_BOX, brick=4)))
+    on = [np.array(v) for v in zero.eval_local(p, d)]
+    zero.view_enabled = glossy.view_enabled = False
+    for a, b in zip(on, zero.eval_local(p, d)):
+        np.testing.assert_array_equal(a, np.array(b))
+    mean = mi.load_dict(brick_field_dict(values[..., :1], values[..., 1:], UNIT_BOX, brick=4))
+    for a, b in zip(mean.eval_local(p, d), glossy.eval_local(p, d)):
+        np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-6, atol=1e-7)
+
+
+def test_the_benchmark_times_the_same_bricks_with_and_without_a_view_lattice():
+    """``bench.py``'s throughput rows: the "view" representation is the "bricks" one (same seed, same values)
+    plus a VIEW_RESOLUTION^3 lattice, and the report gives the seconds of its training step over theirs."""
+    from mi_voldis.bench import report, throughput
+    plain = throughput.make_integrator(8, 16, representation="bricks")
+    view = throughput.make_integrator(8, 16, representation="view")
+    for role in ("full", "bg"):
+        a, b = plain.fields[role], view.fields[role]
+        assert a.view_shape is None and b.view_shape == (throughput.VIEW_RESOLUTION,) * 3
+        bricks_rows = a.rows * a.width
+        np.testing.assert_array_equal(np.array(a.packed), np.array(b.packed)[:bricks_rows])
+    assert throughput.step_functions(8, 16, 64, representation="view")["train"](0) > 0
+    timed = {"forward": {"msps": 1.0, "seconds": 1.0}, "train": {"msps": 1.0, "seconds": 0.2}}
+    row = {"resolution": 8, "samples": 16, "batch": 64, "rays": "random", "voldis": timed,
+           "voldis_view": {**timed, "train": {"msps": 1.0, "seconds": 0.25}}}
+    lines = report._throughput({"bandwidth": {"drjit_gbs": 10.0, "numpy_gbs": 5.0}, "throughput": [row]})
+    assert lines[-2].split(" | ")[9] == "1.25x"

@@ -49,17 +49,22 @@ def _throughput(results):
           "tensor code, autograd, `torch.optim.Adam`); the three run in alternating blocks of steps. The "
           "training step is fitting's: forward, backward, Adam on the packed grid. Rays "
           f"(`mi_voldis/bench/rays.py`): *random* rays, and *tiles* of {tile} x {tile} pixels of random views.",
+          "", "*view step cost*: the training step's seconds with a 64^3 view lattice (grey degree-1 colour's "
+          "default, `sh_view_resolution`) over the same brick grid's without one, run in the same blocks: the "
+          "fit plan's `VIEW_STEP_COST` (`mi_voldis/fit/schedule.py`) should be at least the coarse rows' figure.",
           "", "| grid | samples/ray | batch | rays | bricks fwd Msps | bricks train Msps | % of bound | dense train "
-          "Msps | dense % of bound | torch train Msps | bricks / torch |",
-          "|---|---|---|---|---|---|---|---|---|---|---|"]
+          "Msps | dense % of bound | view step cost | torch train Msps | bricks / torch |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for row in results["throughput"]:
-        v, d, t = row["voldis"], row.get("voldis_dense"), row.get("torch")
+        v, d, t, w = row["voldis"], row.get("voldis_dense"), row.get("torch"), row.get("voldis_view")
         ratio = v["train"]["msps"] / t["train"]["msps"] if t else None
+        view = w["train"]["seconds"] / v["train"]["seconds"] if w else None
         bound_b, bound_d = msps_bound(bw, bytes_b["train"]), msps_bound(bw, bytes_d["train"])
         md.append(f"| {row['resolution']}^3 | {row['samples']} | {row['batch']} | {row.get('rays', 'random')} | "
                   f"{v['forward']['msps']:.1f} | {v['train']['msps']:.1f} | "
                   f"{100 * v['train']['msps'] / bound_b:.0f}% | {_f(d and d['train']['msps'])} | "
-                  f"{_f(d and 100 * d['train']['msps'] / bound_d, 0)}% | {_f(t and t['train']['msps'], 2)} | "
+                  f"{_f(d and 100 * d['train']['msps'] / bound_d, 0)}% | {_f(view, 2)}x | "
+                  f"{_f(t and t['train']['msps'], 2)} | "
                   f"{_f(ratio)}x |")
     return md + [""]
 

@@ -83,14 +83,15 @@ def child(args, log_file=None):
 
 # ------------------------------------------------------------------------------------ 1. throughput
 # (grid vertices per side, samples per ray, rays per batch); every row runs the brick grid (every brick
-# allocated), the dense grid and PyTorch's brick grid side by side
+# allocated), the dense grid, the brick grid with a view lattice and PyTorch's brick grid side by side
 THROUGHPUT_ROWS = [(128, 128, 16384), (256, 128, 16384), (128, 64, 16384), (128, 256, 16384), (128, 128, 65536)]
 QUICK_THROUGHPUT_ROWS = [(64, 64, 4096)]
 
 
 def run_throughput(quick):
     """Rows of THROUGHPUT_ROWS on random rays, the first also on tiled (coherent) rays: voldis bricks,
-    voldis dense and the PyTorch reference of the brick grid, in alternating blocks of steps."""
+    voldis dense, voldis bricks with a view lattice (grey degree 1's default) and the PyTorch reference of
+    the brick grid, in alternating blocks of steps."""
     sizes = QUICK_THROUGHPUT_ROWS if quick else THROUGHPUT_ROWS
     try:
         from . import torch_reference
@@ -101,10 +102,12 @@ def run_throughput(quick):
         for kind in rays.KINDS if k == 0 else ("random",):
             heavy = r == 256 or b == 65536
             impls = {"voldis": throughput.step_functions(r, n, b, rays=kind, representation="bricks"),
-                     "voldis_dense": throughput.step_functions(r, n, b, rays=kind, representation="dense")}
+                     "voldis_dense": throughput.step_functions(r, n, b, rays=kind, representation="dense"),
+                     "voldis_view": throughput.step_functions(r, n, b, rays=kind, representation="view")}
             if torch_reference is not None:
                 impls["torch"] = torch_reference.step_functions(r, n, b, rays=kind, representation="bricks")
-            timed = throughput.interleaved(impls, 4 if heavy else 6, {"voldis": 2, "voldis_dense": 2, "torch": 1})
+            timed = throughput.interleaved(impls, 4 if heavy else 6,
+                                           {"voldis": 2, "voldis_dense": 2, "voldis_view": 2, "torch": 1})
             rows.append({"resolution": r, "samples": n, "batch": b, "rays": kind, **timed})
             del impls  # free the grids before the next row
     return rows

@@ -24,15 +24,22 @@ def device_rays(kind, n, seed):
     return from_numpy(mi.Point3f, o), from_numpy(mi.Vector3f, d), from_numpy(mi.Float, u)
 
 
+VIEW_RESOLUTION = 64  # the view lattice of representation "view": sh_view_resolution's default
+
+
 def make_integrator(resolution, samples, channels=3, seed=0, representation="bricks"):
     """Two random fields (raw density normal(-1, 1), colour normal(0, 1)) of R^3 vertices over [-1, 1]^3,
-    dense or in bricks (every brick allocated: the same field)."""
+    dense, in bricks (every brick allocated: the same field) or, for "view", in bricks with grey
+    view dependence on a VIEW_RESOLUTION^3 view lattice (gloss coefficients normal(0, 0.3))."""
     rng = np.random.default_rng(seed)
     box = box_transform([-1, -1, -1], [1, 1, 1])
     shape = (resolution,) * 3
-    make = brick_field_dict if representation == "bricks" else field_dict
+    make = field_dict if representation == "dense" else brick_field_dict
     specs = {role: make(rng.normal(-1, 1, shape + (1,)), rng.normal(0, 1, shape + (channels,)), box)
              for role in ("full", "bg")}
+    if representation == "view":
+        for spec in specs.values():
+            spec["view"] = mi.TensorXf(rng.normal(0, 0.3, (VIEW_RESOLUTION,) * 3 + (3,)).astype(np.float32))
     return mi.load_dict({"type": "voldis", "samples": samples, **specs}, optimize=False)
 
 

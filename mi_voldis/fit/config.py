@@ -183,8 +183,9 @@ class FitConfig(Settings):
                                              low=2)
     sh_view_from: float = setting(0.5, "degree 1: view-dependent colour fitted only from this fraction of the full "
                                        "phase's planned steps on, the geometry first fitted with the mean colour "
-                                       "(progressive view dependence, as 3D Gaussian splatting raises its degree); "
-                                       "0: from the start", low=0, high=1)
+                                       "(progressive view dependence, as 3D Gaussian splatting raises its degree; "
+                                       "before it a view lattice is not read, and the plan costs only the steps "
+                                       "after it at a lattice's price); 0: from the start", low=0, high=1)
     sh_trial_steps: int = setting(200, "'auto': steps of each degree's trial fit (density and colour, at the end of "
                                        "the coarse stage)", low=1)
 

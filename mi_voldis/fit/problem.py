@@ -33,6 +33,15 @@ def psnr_of(mse):
     return -10 * np.log10(max(float(mse[0]), 1e-12))
 
 
+def view_lattice_zero(field):
+    """Whether ``field`` has a view lattice and every one of its coefficients is 0."""
+    if getattr(field, "view_shape", None) is None:
+        return False
+    start = (field.rows - int(np.prod(field.view_shape))) * field.width
+    view = dr.gather(mi.Float, field.packed, dr.arange(mi.UInt32, dr.width(field.packed) - start) + start)
+    return bool(dr.all(view == 0.0))
+
+
 class FieldFit:
     """One fitting phase: the fields of ``roles`` fitted through ``layers`` to rays of ``bank``
     (``pool``: flat pixel indices to draw from), their updates masked to ``hull`` (a Float per stored
@@ -93,6 +102,7 @@ class FieldFit:
             self.params["exposure"] = self.state.exposure
             self.adam.lrs["exposure"] = self.inputs.cfg.exposure_lr
         self.keys = list(self.params)
+        self.view_zero = {r: view_lattice_zero(self.integrator.fields[r]) for r in self.roles}
         self.neighbours = {}  # per role, made when the TV first needs them
         if resume and self.state.occupancy is not None and self.state.occupancy_phase == self.phase:
             self.integrator.use_occupancy(self.state.occupancy)
@@ -169,6 +179,8 @@ class FieldFit:
                           f"{state.steps_full} steps in all", file=sys.stderr)
             self.adam.reset()
             self.rebuild()
+        for r in self.roles:  # an all-0 view lattice (a new field's before the onset) adds nothing: not read
+            self.integrator.fields[r].view_enabled = step >= self.view_onset() or not self.view_zero[r]
         start = self.schedule and cfg.occupancy_at_step and step >= cfg.occupancy_at_step and not state.occupancy_on
         if start or (state.occupancy_on and step % cfg.occupancy_every == 0 and step > 0 and not upsample):
             state.occupancy_on = True

@@ -263,6 +263,23 @@ def memory_scale(sh_degree, grey=False, view=False):
     return packet_width(1 + color_channels(degree, grey)) / packet_width(4)
 
 
+# A training step's kernels with a view lattice over the same step without one (the same brick grid): the
+# benchmark's random fields, every brick allocated, 64^3 lattice, 8192 tiled rays: 1.29 at 128^3 and 1.14 at
+# 256^3 (reports/notes.md). The larger: a plan that overestimates a step ends early rather than late.
+VIEW_STEP_COST = 1.3
+
+
+def degree_cost_scale(cfg, sh_degree, start=0.0):
+    """A training step's kernels at colour ``sh_degree`` over degree 0's, averaged over the full phase's steps
+    from the fraction ``start`` of them on. On a view lattice (:func:`view_lattice_vertices`) the steps from
+    ``sh_view_from`` on cost VIEW_STEP_COST and those before it degree 0's (the lattice, all 0, is not read);
+    else the vertices' floats over degree 0's (:func:`memory_scale`)."""
+    if not view_lattice_vertices(cfg, sh_degree):
+        return memory_scale(sh_degree, cfg.sh_color == "grey")
+    onset = min(max(float(cfg.sh_view_from or 0.0), start), 1.0)
+    return ((onset - start) + (1.0 - onset) * VIEW_STEP_COST) / (1.0 - start) if start < 1.0 else VIEW_STEP_COST
+
+
 def view_lattice_vertices(cfg, sh_degree):
     """Vertices of the view lattice a field of ``sh_degree`` gets under ``cfg`` (grey degree 1 with
     ``sh_view_resolution``), at most: the resolution cubed; 0 without one."""

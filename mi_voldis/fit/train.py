@@ -78,8 +78,8 @@ from .schedule import (
     choose_step,
     coarse_resolution,
     cost_ahead,
+    degree_cost_scale,
     memory_resolution,
-    memory_scale,
     plan_cost,
     rescale,
     reserved,
@@ -87,6 +87,7 @@ from .schedule import (
     schedule_of,
     stages,
     steps_for,
+    view_lattice_vertices,
 )
 from .sh_degree import choose_sh_degree
 from .shadow import find_shadow
@@ -278,10 +279,11 @@ def cap_for_sh_degree(inputs, state, degree, step):
     memory and costed at degree 0: stages finer than the memory bound at ``degree``
     (:func:`memory_resolution`) take that bound instead, a stage that would repeat the one before it is
     dropped, and the plan records the cap. The default plan (costed at the reference speed) then costs its
-    steps at ``degree``: a step's kernels move vertices of ``memory_scale`` times degree 0's floats, so
-    they cost that much more (``plan['kernel_scale']``, which :func:`plan_cost` applies from then on; on a
-    view lattice too, whose second lookup costs about what the wider vertices would), and the seconds the
-    plan gave the steps from ``step`` on buy that many fewer."""
+    steps at ``degree`` (:func:`~mi_voldis.fit.schedule.degree_cost_scale`: a step's kernels move vertices
+    of more floats, or from ``sh_view_from`` on also read a view lattice), ``plan['kernel_scale']``, which
+    :func:`plan_cost` applies from then on, and the seconds the plan gave the steps from ``step`` on buy that
+    many fewer. A plan made at degree 1 on a view lattice records its scale from the start
+    (:func:`plan_schedule`)."""
     cfg, plan = inputs.cfg, state.plan or {}
     if cfg.resolution != "auto" or "surface_cells" not in plan:
         return
@@ -293,7 +295,7 @@ def cap_for_sh_degree(inputs, state, degree, step):
         state.schedule = capped(state.schedule, cap)
         plan["sh_memory_cap"] = cap
     if left is not None:
-        plan["kernel_scale"] = memory_scale(degree, cfg.sh_color == "grey")
+        plan["kernel_scale"] = degree_cost_scale(cfg, degree, step / state.steps_full)
         state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, plan_cost(plan, coarse),
                                                    left)
         plan.setdefault("rescaled", []).append([step, state.steps_full])
@@ -354,6 +356,9 @@ def plan_schedule(inputs, state, integrator):
         budget = minutes * 60.0 * full_share - spent
         state.plan.update(minutes=float(minutes), coarse_step_seconds=float(cost.at(coarse)), host_ms=cfg.host_ms,
                           budget_seconds=minutes * 60.0 * full_share)
+        if view_lattice_vertices(cfg, cfg.sh_degree):  # the calibration's steps did not read the view lattice
+            state.plan["kernel_scale"] = degree_cost_scale(cfg, cfg.sh_degree)
+            cost = plan_cost(state.plan, coarse)
         if survey is not None and survey["surface_cells"]:
             if cfg.step_voxels == "auto":
                 state.plan["step_voxels"] = choose_step(cfg, cost, budget, survey, inputs.bank.pixels)

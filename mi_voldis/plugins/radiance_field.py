@@ -148,6 +148,9 @@ class RadianceField(mi.Medium):
         super().__init__(props)
         name = props.id() or "radiance_field"
         self.layout, self.view_shape = None, None
+        # whether lookups read the view lattice; fitting turns it off while the lattice is all 0 (before
+        # progressive view dependence's onset): the same values without the lattice's 8 gathers and scatters
+        self.view_enabled = True
         if "grid" in props or "table" in props:
             self.layout, self._data, self.channels, bbox, self.view_shape = _load_bricks(props, name)
             self._check_channels(self.channels - 1)
@@ -296,9 +299,11 @@ class RadianceField(mi.Medium):
         data = self.packed if data is None else data
         if self.layout is not None:
             out = bricks.trilinear(data, self.layout, self.width, self.channels, p, active)
-            if self.view_shape is not None:  # the gloss coefficients, in the RGB slots of the view vertices
+            if self.view_shape is not None and self.view_enabled:  # the gloss, in the view vertices' RGB slots
                 offset = self.layout.slots * self.layout.vertices_per_brick
                 out += grid.trilinear(data, self.view_shape, self.width, 4, p, active, offset)[1:]
+            elif self.view_shape is not None:
+                out += [dr.zeros(mi.Float, dr.width(p)) for _ in range(3)]
             return out
         return grid.trilinear(data, self.shape, self.width, self.channels, p, active)
 
