@@ -59,7 +59,7 @@ def start_cleared(inputs, state):
     carved = object_ray_keys(inputs, full, [v for v in depth if v in set(inputs.ds.masked_train)], depth)
     hull, state.hull_points = hull_region(inputs, full, neighbour_vertices(full))
     region = never_seen(inputs, full, hull > 0, depth) | keys_mask(full, carved)
-    state.fields["bg"] = without_view_dependence(emptied(inputs, state, full, region), hull)
+    state.fields["bg"] = without_view_dependence(emptied(inputs, state, full, region), region)
     return carved
 
 
@@ -161,9 +161,10 @@ def start_harmonic(inputs, state, depths=None):
               else harmonic_fill(data, full.width, region, neighbours, weights=weights))
     # the object itself: empty, its colour the fill's (:func:`emptied`)
     filled = full.with_bricks(values)
-    # the hole's colour is the mean: the 2D prior that paints it disagrees between views, and view dependence
-    # fitted to that would show each view its own inpainting (refit_elements keeps it 0)
-    state.fields["bg"] = without_view_dependence(emptied(inputs, state, filled, obj), hull)
+    # the inpainted hole's colour is the mean: the 2D prior that paints it disagrees between views, and view
+    # dependence fitted to that would show each view its own inpainting (refit_elements keeps it 0); what
+    # some view sees keeps the full field's gloss with its density and colour
+    state.fields["bg"] = without_view_dependence(emptied(inputs, state, filled, obj), region)
     if solid is not None:  # the hidden surface: opaque from the filled depth on (hole_shell)
         state.fields["bg"] = with_opacity(inputs, state, state.fields["bg"], solid & ~obj, SOLID_ALPHA)
     state.hull_points = points

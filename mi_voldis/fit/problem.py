@@ -113,8 +113,8 @@ class FieldFit:
         """The packed elements of ``field`` a refit masked to ``hull`` may change (UInt32, ascending): density
         and the mean colour of the vertices where ``hull`` is not 0, but the empty brick's (slot 0, which
         stands for every unallocated brick). Elsewhere the masked gradient is zero, so Adam would never move
-        them; the view-dependent coefficients stay as the background's start left them (0 in the hull:
-        :func:`~mi_voldis.field_state.without_view_dependence`). Empty where the hull is."""
+        them; the view-dependent coefficients stay as the background's start left them (0 where it
+        inpaints the hole: :func:`~mi_voldis.field_state.without_view_dependence`). Empty where the hull is."""
         inside = (self.hull != 0.0) & (dr.arange(mi.UInt32, dr.width(self.hull)) >= field.layout.vertices_per_brick)
         vertices = dr.compress(inside)
         if dr.width(vertices) == 0:
