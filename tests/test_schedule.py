@@ -547,16 +547,14 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
 
 
 
-def test_degree_one_chosen_in_a_default_plan_costs_its_steps_at_degree_one():
-    """A default plan (costed at the reference speed) that 'auto' turns to grey degree-1 colour at every
-    vertex at step 300: the seconds it gave the steps ahead (at degree 0's cost) buy steps whose kernels
-    cost memory_scale (2) times as much, and the plan's cost says so from then on."""
+def degree_one_at_step_300(cfg):
+    """'auto' turning a default plan (costed at the reference speed; stages 64, 128 from step 300, 192 from
+    600, 3000 steps) to degree 1 at step 300 under ``cfg``: (plan before, state after, the seconds the plan
+    gave the steps from 300 on)."""
     from types import SimpleNamespace
 
-    from mi_voldis.fit.schedule import cost_ahead, memory_scale, plan_cost
+    from mi_voldis.fit.schedule import cost_ahead, plan_cost
     from mi_voldis.fit.train import cap_for_sh_degree
-    cfg = FitConfig().for_backend("llvm").replace(sh_color="grey", sh_view_resolution=None)
-    assert memory_scale(1, grey=True) == 2.0
     plan = {"surface_cells": 10.0, "surface_resolution": 64, "reference_msps": 18.0, "coarse_step_seconds": 0.04,
             "host_ms": 0.0, "step_voxels": 0.5}
     schedule, steps = [[0, 64], [300, 128], [600, 192]], 3000
@@ -564,6 +562,18 @@ def test_degree_one_chosen_in_a_default_plan_costs_its_steps_at_degree_one():
     inputs = SimpleNamespace(cfg=cfg, bank=SimpleNamespace(pixels=PIXELS), ds=SimpleNamespace(masks=None))
     before = cost_ahead(schedule, steps, 300, plan_cost(plan, 64))
     cap_for_sh_degree(inputs, state, 1, 300)
+    return plan, state, before
+
+
+def test_degree_one_chosen_in_a_default_plan_costs_its_steps_at_degree_one():
+    """A default plan (costed at the reference speed) that 'auto' turns to grey degree-1 colour at every
+    vertex at step 300: the seconds it gave the steps ahead (at degree 0's cost) buy steps whose kernels
+    cost memory_scale (2) times as much, and the plan's cost says so from then on."""
+    from mi_voldis.fit.schedule import cost_ahead, memory_scale, plan_cost
+    assert memory_scale(1, grey=True) == 2.0
+    plan, state, before = degree_one_at_step_300(
+        FitConfig().for_backend("llvm").replace(sh_color="grey", sh_view_resolution=None))
+    steps = 3000
     assert state.plan["kernel_scale"] == 2.0 and "sh_memory_cap" not in state.plan  # 192 is within memory
     assert state.schedule[:2] == [[0, 64], [300, 128]] and [r for _, r in state.schedule] == [64, 128, 192]
     assert plan_cost(state.plan, 64).kernels == pytest.approx(2 * plan_cost(plan, 64).kernels)
@@ -572,15 +582,13 @@ def test_degree_one_chosen_in_a_default_plan_costs_its_steps_at_degree_one():
     assert state.steps_full - 300 == pytest.approx((steps - 300) / 2, abs=2)  # ... for half the steps
     assert state.plan["rescaled"] == [[300, state.steps_full]]
 
+
 def test_a_view_lattice_costs_its_steps_from_the_onset_on():
     """Grey degree 1 on a view lattice: the steps before ``sh_view_from`` cost degree 0's (the all-0 lattice
     is not read), those after VIEW_STEP_COST times as much; averaged over the steps from ``start`` on. A
     plan made at degree 1 records that scale, and its steps cost it: the budget buys 1 / scale of degree 0's
     steps on the same grids. 'auto' turning to it at step 300 of 3000 costs the steps ahead the same way."""
-    from types import SimpleNamespace
-
     from mi_voldis.fit.schedule import VIEW_STEP_COST, cost_ahead, degree_cost_scale, plan_cost
-    from mi_voldis.fit.train import cap_for_sh_degree
     grey = FitConfig().for_backend("llvm").replace(sh_color="grey", sh_view_from=0.5)
     k = VIEW_STEP_COST
     assert degree_cost_scale(grey, 1) == pytest.approx(0.5 + 0.5 * k)
@@ -598,13 +606,7 @@ def test_a_view_lattice_costs_its_steps_from_the_onset_on():
                                          calibrated(0.01, samples)).plan  # as before: costed at degree 0
     assert [r for _, r in one.schedule] == [r for _, r in zero.schedule]
     assert one.steps_full == pytest.approx(zero.steps_full / (0.5 + 0.5 * k), rel=2e-3)
-    plan = {"surface_cells": 10.0, "surface_resolution": 64, "reference_msps": 18.0, "coarse_step_seconds": 0.04,
-            "host_ms": 0.0, "step_voxels": 0.5}
-    schedule, steps = [[0, 64], [300, 128], [600, 192]], 3000
-    state = SimpleNamespace(plan=dict(plan), schedule=[list(s) for s in schedule], steps_full=steps)
-    inputs = SimpleNamespace(cfg=grey, bank=SimpleNamespace(pixels=PIXELS), ds=SimpleNamespace(masks=None))
-    before = cost_ahead(schedule, steps, 300, plan_cost(plan, 64))
-    cap_for_sh_degree(inputs, state, 1, 300)
+    _, state, before = degree_one_at_step_300(grey)
     assert state.plan["kernel_scale"] == pytest.approx((0.4 + 0.5 * k) / 0.9)
     assert cost_ahead(state.schedule, state.steps_full, 300, plan_cost(state.plan, 64)) == pytest.approx(before,
                                                                                                          rel=2e-3)
