@@ -13,6 +13,7 @@ from mi_voldis.fit.schedule import (
     COST_EXPONENT,
     StepCost,
     affordable_resolution,
+    degree_cost_scale,
     rescale,
     resolution_at,
     schedule_of,
@@ -351,6 +352,13 @@ def calibrated(seconds, samples, steps=200):
     return SimpleNamespace(log=log, plan=None, steps_full=None, schedule=None)
 
 
+def default_step(cfg):
+    """The coarse step a default plan is costed at in the tests below: 0.01 s of kernels at the reference
+    speed (:func:`calibrated`'s samples), times the colour's charge (:func:`degree_cost_scale`: grey degree 1
+    on a view lattice, the default, costs the steps from ``sh_view_from`` on at ``VIEW_STEP_COST``)."""
+    return StepCost(0.01 * degree_cost_scale(cfg, cfg.sh_degree), 64)
+
+
 def planned(cfg, state, masks=None):
     from types import SimpleNamespace
 
@@ -372,7 +380,7 @@ def test_the_default_plan_is_costed_at_the_reference_speed_whatever_the_machine(
     state = planned(cfg, calibrated(0.01 * load, samples))
     budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
     assert state.plan["coarse_step_seconds"] == pytest.approx(0.01)
-    assert state.steps_full == max(steps_for(stages(cfg, 64, 256), StepCost(0.01, 64), budget), 500)
+    assert state.steps_full == max(steps_for(stages(cfg, 64, 256), default_step(cfg), budget), 500)
     PLANS[load] = (state.schedule, state.steps_full)
     assert PLANS[load] == PLANS.get(1.0, PLANS[load])  # a faster or slower machine plans the same fit
     from mi_voldis.fit.train import replan
@@ -393,7 +401,7 @@ def test_a_default_plan_capped_by_memory_spends_the_seconds_it_saves_on_steps_at
     cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=500)
     state = planned(cfg, calibrated(0.01, 0.01 * cfg.reference_msps * 1e6))
     cost = plan_cost(state.plan, state.schedule[0][1])
-    assert cost.at([64, 256]) == pytest.approx(StepCost(0.01, 64).at([64, 256]))
+    assert cost.at([64, 256]) == pytest.approx(default_step(cfg).at([64, 256]))
     (start, last), end, budget = state.schedule[-1], state.steps_full, state.plan["budget_seconds"]
     schedule, steps = rescale_after_cap(state.schedule, end, start, 192, cost, budget)
     assert schedule == state.schedule[:-1] + [[start, 192]]
@@ -417,14 +425,14 @@ def test_the_default_resolution_is_the_finest_the_reference_speed_affords(monkey
     for load in (1.0, 4.0):
         state = planned(cfg, calibrated(0.01 * load, samples))
         budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
-        assert state.plan["final_resolution"] == affordable_resolution(cfg, StepCost(0.01, 64), budget, SURVEY,
+        assert state.plan["final_resolution"] == affordable_resolution(cfg, default_step(cfg), budget, SURVEY,
                                                                        4 * 100 * 100) < 1024
 
 
 def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked():
     cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=5000)
     state = planned(cfg, calibrated(0.5, 0.01 * cfg.reference_msps * 1e6))  # a slow machine changes nothing
-    budgeted = steps_for(stages(cfg, 64, 256), StepCost(0.01, 64), state.plan["budget_seconds"] - 2.0)
+    budgeted = steps_for(stages(cfg, 64, 256), default_step(cfg), state.plan["budget_seconds"] - 2.0)
     assert budgeted < 5000 and state.plan["min_steps"] == 5000 and state.schedule[-1][1] == 256
     assert state.steps_full == 5000
 
@@ -444,7 +452,7 @@ def test_a_capture_without_masks_gives_its_full_field_the_background_refits_shar
     assert scratch.plan["budget_seconds"] == plans[False].plan["budget_seconds"]
     for masked, state in plans.items():
         budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
-        assert state.steps_full == steps_for(stages(cfg, 64, 256), StepCost(0.01, 64), budget)
+        assert state.steps_full == steps_for(stages(cfg, 64, 256), default_step(cfg), budget)
     assert plans[False].steps_full > plans[True].steps_full * 1.15
 
 
@@ -512,7 +520,7 @@ def test_degree_one_colour_is_bounded_in_memory_as_its_four_times_wider_vertices
     from mi_voldis.fit.train import cap_for_sh_degree
     assert memory_scale(0) == memory_scale("auto") == 1.0 and memory_scale(1) == 4.0  # 16 floats a vertex, not 4
     assert memory_scale(1, grey=True) == 2.0 and memory_scale(0, grey=True) == 1.0  # grey: 7 floats in 8
-    cfg = FitConfig().for_backend("llvm")
+    cfg = FitConfig().for_backend("llvm").replace(sh_color="rgb")
     cells = 2000.0  # at 64^3
     r0, r1 = (memory_resolution(cfg, cells, 64, 64, d, PIXELS) for d in (0, 1))
     for r, d in ((r0, 0), (r1, 1)):
@@ -588,7 +596,7 @@ def test_a_view_lattice_costs_its_steps_from_the_onset_on():
     is not read), those after VIEW_STEP_COST times as much; averaged over the steps from ``start`` on. A
     plan made at degree 1 records that scale, and its steps cost it: the budget buys 1 / scale of degree 0's
     steps on the same grids. 'auto' turning to it at step 300 of 3000 costs the steps ahead the same way."""
-    from mi_voldis.fit.schedule import VIEW_STEP_COST, cost_ahead, degree_cost_scale, plan_cost
+    from mi_voldis.fit.schedule import VIEW_STEP_COST, cost_ahead, plan_cost
     grey = FitConfig().for_backend("llvm").replace(sh_color="grey", sh_view_from=0.5)
     k = VIEW_STEP_COST
     assert degree_cost_scale(grey, 1) == pytest.approx(0.5 + 0.5 * k)
@@ -641,7 +649,8 @@ def test_the_step_is_a_whole_voxel_where_memory_not_the_budget_bounds_the_grid(m
     tight = planned(cfg.replace(max_memory_gib=0.6), calibrated(0.01, samples))  # memory bounds the grid
     loose = planned(cfg.replace(max_memory_gib=1e4), calibrated(0.01, samples))  # the budget does
     budget = tight.plan["budget_seconds"] - cfg.calibration_steps * 0.01
-    half, whole = StepCost(0.01, 64), StepCost(0.01, 64).marching(WHOLE_VOXEL)
+    half = default_step(cfg)
+    whole = half.marching(WHOLE_VOXEL)
     assert tight.plan["step_voxels"] == WHOLE_VOXEL and loose.plan["step_voxels"] == HALF_VOXEL
     assert choose_step(cfg.replace(max_memory_gib=0.6), half, budget, survey, pixels) == WHOLE_VOXEL
     # memory-bound: the grid the half-voxel plan would have picked, more steps on it
