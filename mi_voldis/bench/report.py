@@ -50,8 +50,9 @@ def _throughput(results):
           "training step is fitting's: forward, backward, Adam on the packed grid. Rays "
           f"(`mi_voldis/bench/rays.py`): *random* rays, and *tiles* of {tile} x {tile} pixels of random views.",
           "", "*view step cost*: the training step's seconds with a 64^3 view lattice (grey degree-1 colour's "
-          "default, `sh_view_resolution`) over the same brick grid's without one, run in the same blocks: the "
-          "fit plan's `VIEW_STEP_COST` (`mi_voldis/fit/schedule.py`) should be at least the coarse rows' figure.",
+          "default, `sh_view_resolution`) over the same brick grid's without one, run in the same blocks: an upper "
+          "bound on the fit plan's `VIEW_STEP_COST` (`mi_voldis/fit/schedule.py`), which fits measure lower "
+          "(`reports/notes.md`).",
           "", "| grid | samples/ray | batch | rays | bricks fwd Msps | bricks train Msps | % of bound | dense train "
           "Msps | dense % of bound | view step cost | torch train Msps | bricks / torch |",
           "|---|---|---|---|---|---|---|---|---|---|---|---|"]

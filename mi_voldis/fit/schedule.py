@@ -263,10 +263,13 @@ def memory_scale(sh_degree, grey=False, view=False):
     return packet_width(1 + color_channels(degree, grey)) / packet_width(4)
 
 
-# A training step's kernels with a view lattice over the same step without one (the same brick grid): the
-# benchmark's random fields, every brick allocated, 64^3 lattice, 8192 tiled rays: 1.29 at 128^3 and 1.14 at
-# 256^3 (reports/notes.md). The larger: a plan that overestimates a step ends early rather than late.
-VIEW_STEP_COST = 1.3
+# A training step's kernels with a 64^3 view lattice over the same step without one, as fits run it: the
+# seconds a sample after the onset over those before, each fit alone on the machine, 1.095 (family13) and 1.051
+# (family14) (reports/notes.md, 2026-11-29). The larger, rounded up: a plan that overestimates a step ends early
+# rather than late. The benchmark's random fields (every brick allocated, every sample in one) give more, 1.29 at
+# 128^3 and 1.14 at 256^3; at 1.3 the plans of fern, horns and the statue, whose observation and memory bounds
+# tie, turned to half-voxel steps at twice the samples a ray (reports/notes.md, twenty-sixth session).
+VIEW_STEP_COST = 1.1
 
 
 def degree_cost_scale(cfg, sh_degree, start=0.0):

@@ -19,6 +19,8 @@ python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu
   garden=$W/garden fern=$W/fern statue=$W/statue horns=$W/horns lego_200=$W/lego_200
 python $E/plans.py reports/captures/cpu_2026-11-27_step_auto.json reports/captures/cpu_2026-11-29_grey_charged.json \
   > $E/plans.txt
+# which step each capture's plan takes at other charges for the view lattice, rebuilt from the recorded plans
+python $E/step_choice.py $W/fern $W/horns $W/statue $W/garden > $E/step_choice.txt
 # 2. the removal family's tuning half, the six scenes the last session did not fit (three per process)
 python scripts/bench.py --family --scenes family03,family05,family08 --work $W/tune_E --report $W/tune_E/report \
   --set sh_degree=1 --set 'sh_color="grey"'
