@@ -32,11 +32,11 @@ python reports/experiments/2026-11-29g/gloss_keep_seen/screen.py $W/check_A $W/c
 # and as the bench's own trial report (family.md, contact sheets), every fit and row reused
 python $E/merge_work.py $W/family_all $W/check_A $W/check_B $W/tune_C $W/tune_D $W/tune_E $W/tune_F
 python scripts/bench.py --family --work $W/family_all --report $E/report --set sh_degree=1 --set 'sh_color="grey"'
-# 3. at 75d82fc (VIEW_STEP_COST 1.1): fern and the statue again, side by side, to confirm the rebuilt plans
-for c in fern statue; do
+# 3. at 75d82fc (VIEW_STEP_COST 1.1): the captures again, to confirm the rebuilt plans (two at a time here)
+for c in fern statue horns garden; do
   $T python scripts/train.py $D/$c --out $W/v11_$c --set sh_degree=1 --set sh_color=grey > $W/v11_$c.log 2>&1 &
 done
 wait
 python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu_2026-11-30_grey_view_cost_1_1.json \
   "python scripts/train.py ../shared/data/CAPTURE --out RUN --set sh_degree=1 --set sh_color=grey" \
-  "VIEW_STEP_COST 1.1" fern=$W/v11_fern statue=$W/v11_statue
+  "VIEW_STEP_COST 1.1" fern=$W/v11_fern statue=$W/v11_statue horns=$W/v11_horns garden=$W/v11_garden
