@@ -354,8 +354,9 @@ def calibrated(seconds, samples, steps=200):
 
 def default_step(cfg):
     """The coarse step a default plan is costed at in the tests below: 0.01 s of kernels at the reference
-    speed (:func:`calibrated`'s samples), times the colour's charge (:func:`degree_cost_scale`: grey degree 1
-    on a view lattice, the default, costs the steps from ``sh_view_from`` on at ``VIEW_STEP_COST``)."""
+    speed (:func:`calibrated`'s samples), times the colour's charge (:func:`degree_cost_scale`: 1 for 'auto',
+    which starts at degree 0; grey degree 1 on a view lattice costs the steps from ``sh_view_from`` on at
+    ``VIEW_STEP_COST``), so the tests hold whichever colour is the default."""
     return StepCost(0.01 * degree_cost_scale(cfg, cfg.sh_degree), 64)
 
 
