@@ -56,8 +56,10 @@ def _fractions_error(value):
 class FitConfig(Settings):
     # settings added since runs were first recorded, at the values those runs were fitted with (not a field:
     # no annotation): plans before host_ms had no host term; background refits before bg_lr_* / bg_tv_*
-    # stepped with the then default rates and TV weights, and filled the hull isotropically
-    ADDED = {"host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4, "bg_tv_color": 1e-5,
+    # stepped with the then default rates and TV weights, and filled the hull isotropically; degree-1 colour
+    # before sh_color was RGB
+    ADDED = {"sh_color": "rgb", "host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4,
+             "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
              "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0}
@@ -164,9 +166,9 @@ class FitConfig(Settings):
     # ---- initialisation
     density_init_alpha: float = setting(1e-3, "initial opacity of one sample step (softplus-shifted, like DVGO)",
                                         above=0, high=0.5)
-    sh_degree: int | str = setting("auto", "colour: 0 (RGB), 1 (spherical harmonics), or 'auto': degree 1 only "
-                                           "if it pays on validation views", choices=("auto", 0, 1))
-    sh_color: str = setting("rgb", "view-dependent colour at degree 1: 'rgb' (a triple a harmonic) or 'grey' (one "
+    sh_degree: int | str = setting(1, "colour: 0 (RGB), 1 (spherical harmonics: view-dependent colour), or "
+                                      "'auto': degree 1 only if it pays on validation views", choices=("auto", 0, 1))
+    sh_color: str = setting("grey", "view-dependent colour at degree 1: 'rgb' (a triple a harmonic) or 'grey' (one "
                                    "coefficient a harmonic added to R, G and B alike: a gloss that brightens or "
                                    "darkens with the view, at half a degree-1 vertex's memory)",
                             choices=("rgb", "grey"))
