@@ -30,3 +30,8 @@ python reports/experiments/2026-11-29g/gloss_keep_seen/screen.py $W/tune_A $W/tu
 # 3. at the commit that made grey degree 1 the default: the bench's own report, every fit reused
 python reports/experiments/2026-11-29h/grey_charged/merge_work.py $W/family_all $W/tune_A $W/tune_B $W/check_A $W/check_B
 python scripts/bench.py --family --work $W/family_all
+# 4. at 3eab5d0, alone on the machine: the statue under the new default, for its wall time
+/usr/bin/time -v python scripts/train.py $D/statue --out $W/statue_alone > $W/statue_alone.log 2>&1
+python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu_2026-11-30_statue_alone.json \
+  "python scripts/train.py ../shared/data/statue --out RUN" \
+  "the default command at 3eab5d0 (grey degree 1), alone on the 2 cores" statue=$W/statue_alone
