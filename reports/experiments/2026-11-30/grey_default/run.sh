@@ -35,3 +35,8 @@ python scripts/bench.py --family --work $W/family_all
 python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu_2026-11-30_statue_alone.json \
   "python scripts/train.py ../shared/data/statue --out RUN" \
   "the default command at 3eab5d0 (grey degree 1), alone on the 2 cores" statue=$W/statue_alone
+# 5. at 70bbacb, alone on the machine: fern under the new default, for its wall time
+/usr/bin/time -v python scripts/train.py $D/fern --out $W/fern_alone > $W/fern_alone.log 2>&1
+python reports/experiments/2026-11-28/distortion/collect.py reports/captures/cpu_2026-11-30_fern_alone.json \
+  "python scripts/train.py ../shared/data/fern --out RUN" \
+  "the default command at 70bbacb (grey degree 1), alone on the 2 cores" fern=$W/fern_alone
