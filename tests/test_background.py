@@ -652,6 +652,29 @@ def test_the_floor_under_the_object_starts_whole_when_the_hull_is_filled_along_t
     assert np.median(floors[1.0]) < 0.0
 
 
+def test_the_fill_finds_the_up_at_the_object_when_its_hull_runs_out_to_the_far_shell():
+    """A one-sided rig's unseen hull runs from the object out to a contracted space's far shell. The fill's
+    axis weights carry the world's up (+y: the ring of level cameras) into the lattice where the object is:
+    inside the linear cube the contraction is the identity, so the weights are 1 along x and z and 0 along
+    y, however far the hull's tail reaches. Read at the tail's mean, far out in the shell, the radial squeeze
+    there would tilt the up towards the tail."""
+    from types import SimpleNamespace
+
+    from mi_voldis.fieldspec import box_transform
+    from mi_voldis.fit.background import fill_weights
+    rng = np.random.default_rng(0)
+    space = SceneSpace("contract", np.eye(4), shell=1.0)
+    cams = [Camera(look_at([3 * np.sin(a), 0.5, 3 * np.cos(a)], [0, 0, 0]), 50.0, 32, 24)
+            for a in np.linspace(0, 2 * np.pi, 8, endpoint=False)]
+    inputs = SimpleNamespace(cfg=SimpleNamespace(hull_fill_vertical=0.0), space=space,
+                             ds=SimpleNamespace(cameras=cams, train=np.arange(8)))
+    field = SimpleNamespace(to_world=box_transform([-2.0] * 3, [2.0] * 3), shape=(65, 65, 65))
+    cluster = np.array([0.2, 0.0, 0.1]) + rng.uniform(-0.2, 0.2, (2000, 3))
+    tail = np.array([0.2, 0.0, 0.1]) + np.geomspace(1.0, 1e9, 1500)[:, None] * np.array([0.1, -1.0, 0.4])
+    points = space.from_world_np(np.concatenate([cluster, tail]))
+    np.testing.assert_allclose(fill_weights(inputs, field, points), [1, 1, 0, 0, 1, 1], atol=1e-6)
+
+
 def test_a_shadow_given_as_effect_masks_leaves_with_the_object_and_the_floor_keeps_its_geometry(tmp_path):
     """The sphere's shadow on the floor, given as effect masks: the guided refit fits no ray of it to the
     photos (the ray pool leaves its pixels out) and draws it from the prior, so on the held-out views

@@ -335,18 +335,22 @@ def clear_empty_background_color(inputs, state, region=None):
 def fill_weights(inputs, field, points):
     """The six neighbour weights (-x, +x, -y, +y, -z, +z) of the hull's fill: the diagonal of the
     conductivity K = I - (1 - v) u u^T in ``field``'s vertex units, u the world's up there
-    (:func:`~mi_voldis.cameras.world_up`, carried through the scene space at the hull's centre
-    ``points``' mean) and v = ``hull_fill_vertical``. At v = 1 the fill is the isotropic Laplace
-    equation; towards 0 it runs along the horizontal alone, so each slice of the hull is filled from
-    its own rim: a floor crossing the hull continues under the object, and the air above it stays air
-    instead of taking a share of the floor's density (a translucent body of the hull's shape)."""
+    (:func:`~mi_voldis.cameras.world_up`, carried through the scene space at the hull's centre: the
+    median of ``points`` in world space, over a step small against its distance from the origin, so
+    that the carrying stays local where the hull runs out to a contracted space's far shell, as an
+    object's unseen hull does behind it on a one-sided rig) and v = ``hull_fill_vertical``. At v = 1
+    the fill is the isotropic Laplace equation; towards 0 it runs along the horizontal alone, so each
+    slice of the hull is filled from its own rim: a floor crossing the hull continues under the object,
+    and the air above it stays air instead of taking a share of the floor's density (a translucent body
+    of the hull's shape)."""
     v = inputs.cfg.hull_fill_vertical
     if v == 1.0 or len(points) == 0:
         return None
     ds = inputs.ds
     up = world_up([ds.cameras[i] for i in ds.train])
     world = inputs.space.to_world_np(points)
-    centre, step = world.mean(0), 1e-3 * max(float(np.ptp(world, 0).max()), 1e-6)  # locally linear there
+    centre = np.median(world, axis=0)
+    step = 1e-4 * (1.0 + float(np.abs(centre).max()))  # locally linear there, and far above float64's rounding
     ends = inputs.space.from_world_np(np.stack([centre, centre + step * up]))
     local = np.linalg.solve(field.to_world[:3, :3], ends[1] - ends[0]) * (np.array(field.shape) - 1)
     u = local / np.linalg.norm(local)

@@ -1,0 +1,20 @@
+"""A fitted run kept with --keep-checkpoints, loaded for the probes of this folder: its settings as a `guided`
+refit reads them, its dataset, its final state and the fit's inputs."""
+import json
+import os
+
+from mi_voldis.bench.strategies import refit_config
+from mi_voldis.data import load_dataset
+from mi_voldis.fit.fields import FitInputs
+from mi_voldis.fit.state import FitState
+from mi_voldis.optim.adam import Adam
+
+
+def load_run(run):
+    """(cfg, dataset, state, inputs) of ``run``."""
+    cfg = refit_config(run, "guided")
+    with open(os.path.join(run, "config.json")) as f:
+        rec = json.load(f)["dataset"]
+    ds = load_dataset(rec["path"], rec["format"], rec["holdout"])
+    state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), Adam({}, 0.9, 0.99))
+    return cfg, ds, state, FitInputs.of(ds, cfg, os.devnull, progress=False)
