@@ -35,3 +35,9 @@ python reports/experiments/2026-11-29c/coverage/ray_regions.py $W/statue 8 255,1
 python $E/fill_up/fill_up.py $W/statue $FITS/runs/family{17,01,03,05,07,09,11,13,15,19,06}_0
 sh reports/experiments/2026-11-28/bg_trials/refit.sh $FITS $W/fillfix "09 17 01 03 05 07 11 13 15 19"
 python reports/experiments/2026-11-29g/gloss_keep_seen/screen.py $W/fillfix > $E/fill_up/refits_screen.txt
+# 6. garden's vase with the box masks under today's default (reports/garden_removal.md), at c248395
+python scripts/train.py $D/garden --out $W/gbox/run --keep-checkpoints
+python scripts/make_masks.py $D/garden --out $W/gbox/masks --run $W/gbox/run --box 0.45,-0.1,-1.05,1.77,0.7,-0.15
+python -c "from mi_voldis.bench.masks import masked_copy; masked_copy('$D/garden', '$W/gbox/masks', '$W/gbox/data')"
+python -m mi_voldis.bench.strategies $W/gbox/run guided $W/gbox/out $W/gbox/data
+cp $W/gbox/out/metrics.json $E/garden_box/metrics.json
