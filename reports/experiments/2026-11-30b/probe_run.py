@@ -10,11 +10,12 @@ from mi_voldis.fit.state import FitState
 from mi_voldis.optim.adam import Adam
 
 
-def load_run(run):
-    """(cfg, dataset, state, inputs) of ``run``."""
+def load_run(run, dataset=None):
+    """(cfg, dataset, state, inputs) of ``run``; ``dataset``: another copy of its dataset to read (e.g. one
+    with masks made from a box)."""
     cfg = refit_config(run, "guided")
     with open(os.path.join(run, "config.json")) as f:
         rec = json.load(f)["dataset"]
-    ds = load_dataset(rec["path"], rec["format"], rec["holdout"])
+    ds = load_dataset(dataset or rec["path"], rec["format"], rec["holdout"])
     state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), Adam({}, 0.9, 0.99))
     return cfg, ds, state, FitInputs.of(ds, cfg, os.devnull, progress=False)

@@ -41,3 +41,4 @@ python scripts/make_masks.py $D/garden --out $W/gbox/masks --run $W/gbox/run --b
 python -c "from mi_voldis.bench.masks import masked_copy; masked_copy('$D/garden', '$W/gbox/masks', '$W/gbox/data')"
 python -m mi_voldis.bench.strategies $W/gbox/run guided $W/gbox/out $W/gbox/data
 cp $W/gbox/out/metrics.json $E/garden_box/metrics.json
+python $E/garden_box/fill_axis.py $W/gbox/run $W/gbox/data > $E/garden_box/fill_axis.txt
