@@ -2,8 +2,9 @@
 
 An *inpainter* is any callable ``(image (H, W, 3) float in [0, 1], hole (H, W) bool) -> (H, W, 3)``
 that replaces the hole's pixels; :data:`INPAINTERS` names the built-in ones (OpenCV's Telea and
-Navier-Stokes, OpenCV contrib's frequency-selective reconstruction, and the harmonic membrane), and
-'auto' the best one installed: 'fsr' where OpenCV has its contrib modules, else 'telea'. A learned
+Navier-Stokes, OpenCV contrib's frequency-selective reconstruction, the harmonic membrane and the
+row-wise fill from beside the hole), 'auto' the best one installed: 'fsr' where OpenCV has its contrib
+modules, else 'telea', and names joined by '+' the mean of their fills (:func:`blend`). A learned
 inpainter (LaMa and the like) plugs in through the same signature.
 
 Depth is filled as disparity q = 1 / z (z: depth along the optical axis): on a plane, q is an affine
@@ -47,11 +48,61 @@ def membrane_inpaint(image, hole):
     return np.stack([harmonic_fill(image[..., c], hole) for c in range(image.shape[-1])], -1).astype(np.float32)
 
 
+def lateral_inpaint(image, hole, band=3, smooth=2):
+    """Each row of the hole filled across, from the colours beside it: a run of hole pixels [a, b] takes
+    the linear interpolation between the mean of the (up to) ``band`` known pixels just left of it and
+    of those just right of it, each placed at its pixels' mean column (exact where the colour is affine
+    along the row); with known pixels on one side only, that side's mean. The fill is then averaged over
+    ``2 smooth + 1`` rows among the hole's own pixels (a row's few neighbours are noisy); rows with no
+    known pixel beside a run take the harmonic fill of the rest (:func:`membrane_inpaint`).
+
+    The surfaces an object hides on a level camera are mostly horizontal bands (floor, the wall's foot,
+    a path, a hedge) that run on behind it, and the object's own contact shadow lies under it: a fill
+    from every side (Telea, Navier-Stokes, FSR) carries what stands below the hole upward through it (a
+    pedestal's top, the shadow), this one only what stands beside it."""
+    hole = np.asarray(hole, bool)
+    out = np.asarray(image, np.float32).copy()
+    w = hole.shape[1]
+    cols = np.arange(w)
+    done = ~hole  # known, or filled from beside
+    for y in np.nonzero(hole.any(1))[0]:
+        row = hole[y]
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], row.astype(np.int8), [0]])))
+        for a, b in zip(edges[0::2], edges[1::2] - 1):  # the row's hole runs [a, b]
+            left, right = cols[max(a - band, 0):a], cols[b + 1:b + 1 + band]
+            left, right = left[~row[left]], right[~row[right]]
+            if not len(left) and not len(right):
+                continue  # left to the harmonic fill
+            if len(left) and len(right):
+                t = (np.arange(a, b + 1) - left.mean()) / (right.mean() - left.mean())
+                out[y, a:b + 1] = (1 - t)[:, None] * out[y, left].mean(0) + t[:, None] * out[y, right].mean(0)
+            else:
+                out[y, a:b + 1] = out[y, left if len(left) else right].mean(0)
+            done[y, a:b + 1] = True
+    if smooth:
+        out = _blur_rows_within(out, hole & done, smooth)
+    if not done.all():
+        out = membrane_inpaint(out, ~done)
+    return out
+
+
+def _blur_rows_within(image, mask, r):
+    """``image`` with each ``mask`` pixel replaced by the mean of the ``mask`` pixels of its column within ``r``
+    rows of it (a box filter along the columns, normalised over the mask)."""
+    m = np.pad(mask.astype(np.float64), ((r + 1, r), (0, 0)))
+    v = np.pad(np.where(mask[..., None], image, 0.0), ((r + 1, r), (0, 0), (0, 0)))
+    cm, cv = np.cumsum(m, 0), np.cumsum(v, 0)
+    k = 2 * r + 1
+    count, total = cm[k:] - cm[:-k], cv[k:] - cv[:-k]  # rows y - r .. y + r
+    return np.where(mask[..., None], total / np.maximum(count, 1)[..., None], image).astype(np.float32)
+
+
 INPAINTERS = {
     "telea": lambda image, hole: opencv_inpaint(image, hole, "telea"),
     "ns": lambda image, hole: opencv_inpaint(image, hole, "ns"),
     "membrane": membrane_inpaint,
     "fsr": fsr_inpaint,
+    "lateral": lateral_inpaint,
 }
 
 
@@ -72,35 +123,59 @@ def has_contrib():
 
 def resolve(name):
     """The built-in inpainter that the name ``name`` stands for: 'auto' is 'fsr' where OpenCV has its
-    contrib modules and :data:`FALLBACK` where not; any other name itself."""
+    contrib modules and :data:`FALLBACK` where not; a blend 'a+b' is its parts resolved; any other name
+    itself."""
+    if "+" in name:
+        return "+".join(resolve(part) for part in name.split("+"))
     if name == "auto":
         return "fsr" if has_contrib() else FALLBACK
     return name
 
 
+def name_problem(name):
+    """Why ``name`` names no inpainter (None when it does): one of :data:`INPAINTERS`, 'auto', or a blend
+    of them joined by '+'."""
+    unknown = [part for part in name.split("+") if part != "auto" and part not in INPAINTERS]
+    if unknown:
+        return f"unknown inpainter {unknown[0]!r}: one of auto, {', '.join(INPAINTERS)}, or several joined by '+'"
+    return None
+
+
 def fallback_note(name):
-    """The one line that says which inpainter 'auto' uses instead of 'fsr', or None when it is 'fsr' (or
-    ``name`` is no 'auto')."""
-    if name != "auto" or resolve(name) == "fsr":
+    """The one line that says which inpainter 'auto' (alone or in a blend) uses instead of 'fsr', or None
+    when it is 'fsr' (or ``name`` holds no 'auto')."""
+    if "auto" not in name.split("+") or has_contrib():
         return None
     return (f"OpenCV has no contrib modules (cv2.xphoto): the 2D prior inpaints with {FALLBACK!r} instead of 'fsr' "
             "(pip install opencv-contrib-python-headless for it)")
 
 
+def blend(fills):
+    """The inpainter whose fill is the mean of ``fills``' (inpainters). Fills that fail differently err
+    less together: FSR and Telea carry what stands under an object (its contact shadow, a pedestal)
+    up through the hole, the lateral fill flattens stripes that do not run along the rows (the
+    removal family's screen in reports/notes.md, 2026-11-30)."""
+    def blended(image, hole):
+        return (sum(np.asarray(f(image, hole), np.float64) for f in fills) / len(fills)).astype(np.float32)
+    return blended
+
+
 def inpainter(name_or_callable):
-    """The inpainter named ``name_or_callable`` in :data:`INPAINTERS` (or 'auto', :func:`resolve`), or the
-    callable itself."""
+    """The inpainter named ``name_or_callable`` in :data:`INPAINTERS` (or 'auto', :func:`resolve`; names
+    joined by '+': their :func:`blend`), or the callable itself."""
     if callable(name_or_callable):
         return name_or_callable
-    name = resolve(name_or_callable)
-    if name not in INPAINTERS:
-        raise ValueError(f"unknown inpainter {name_or_callable!r}: one of auto, {', '.join(INPAINTERS)} or a callable")
-    return INPAINTERS[name]
+    problem = name_problem(name_or_callable)
+    if problem:
+        raise ValueError(problem)
+    if "+" in name_or_callable:
+        return blend([inpainter(part) for part in name_or_callable.split("+")])
+    return INPAINTERS[resolve(name_or_callable)]
 
 
 def inpainter_name(name_or_callable):
-    """What a run's metrics record as its inpainter: the built-in name 'auto' resolved to, or a callable's
-    ``__name__``."""
+    """What a run's metrics record as its inpainter: the built-in name 'auto' resolved to (a blend's
+    parts resolved), or a callable's ``__name__``."""
     if callable(name_or_callable):
         return getattr(name_or_callable, "__name__", type(name_or_callable).__name__)
     return resolve(name_or_callable)

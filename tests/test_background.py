@@ -181,6 +181,65 @@ def test_inpainters_are_named_or_callable():
         inpainter("lama")
 
 
+def test_the_lateral_fill_is_exact_on_colours_affine_along_the_rows():
+    """Colours affine in x (any per-row offset): each row's run is the straight line through the means of
+    the pixels beside it, placed at their mean columns, so the fill is exact; with a colour affine in y
+    too, rows whose smoothing window lies in the hole are exact as well; the known pixels stay."""
+    from mi_voldis.inpaint2d import lateral_inpaint
+    h, w = 30, 40
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    hole = np.zeros((h, w), bool)
+    hole[8:22, 12:27] = True
+    hole[10:14, 27:30] = True  # a ragged edge: the runs differ in length
+    rows = np.random.default_rng(2).uniform(0, 0.5, h)[:, None]
+    image = np.stack([0.1 + 0.02 * x + rows, 0.9 - 0.015 * x + 0 * rows, 0.3 + 0.01 * x + rows], -1)
+    out = lateral_inpaint(image.astype(np.float32), hole, smooth=0)
+    np.testing.assert_allclose(out[hole], image[hole], atol=1e-5)
+    np.testing.assert_array_equal(out[~hole], image.astype(np.float32)[~hole])
+    affine = np.stack([0.1 + 0.01 * x + 0.02 * y, 0.5 - 0.01 * y, 0.2 + 0.005 * x], -1).astype(np.float32)
+    out = lateral_inpaint(affine, hole, smooth=2)
+    inner = hole & np.roll(hole, 2, 0) & np.roll(hole, -2, 0)
+    assert inner.sum() > 100
+    np.testing.assert_allclose(out[inner], affine[inner], atol=1e-5)
+
+
+def test_the_lateral_fill_continues_the_bands_beside_a_tall_hole_where_telea_carries_the_pedestal_up():
+    """A statue on a white pedestal before horizontal bands (lawn, path, hedge): the lateral fill gives each
+    band's own colour across the hole, the pedestal's white goes no higher than the pedestal; Telea fills
+    from every side and carries the white upward."""
+    from mi_voldis.inpaint2d import lateral_inpaint
+    h, w = 60, 40
+    bands = np.array([[0.1, 0.3, 0.1], [0.5, 0.5, 0.5], [0.2, 0.6, 0.2]])  # hedge, path, lawn (top to bottom)
+    image = np.repeat(bands, 20, 0)[:, None, :].repeat(w, 1).astype(np.float32)
+    image[50:, 10:30] = 0.95  # the pedestal
+    hole = np.zeros((h, w), bool)
+    hole[5:50, 14:26] = True  # the statue, standing on the pedestal
+    row = np.arange(h)[:, None]
+    away = hole & (np.minimum(np.abs(row - 20), np.abs(row - 40)) > 2)  # off the band edges (smooth = 2)
+    lateral, telea = lateral_inpaint(image, hole), inpainter("telea")(image, hole)
+    np.testing.assert_allclose(lateral[away], image[away], atol=1e-6)
+    lowest = hole & (row >= 44)  # the lawn just over the pedestal
+    assert np.abs(lateral[lowest] - image[lowest]).max() < 1e-6
+    assert np.abs(telea[lowest] - image[lowest]).mean() > 0.1
+
+
+def test_the_lateral_fill_takes_the_one_side_it_has_and_fills_whole_rows_from_above_and_below():
+    """A hole at the image's left edge takes its right side's colour; rows that are hole from edge to edge
+    have nothing beside them and take the harmonic fill between the rows above and below."""
+    from mi_voldis.inpaint2d import lateral_inpaint
+    image = np.zeros((20, 16, 3), np.float32)
+    image[:, :, 0] = np.linspace(0, 1, 16)[None, :]
+    image[:10, :, 1], image[10:, :, 1] = 0.2, 0.8
+    hole = np.zeros((20, 16), bool)
+    hole[2:6, :5] = True
+    hole[9:11, :] = True
+    out = lateral_inpaint(image, hole, band=3, smooth=0)
+    np.testing.assert_allclose(out[2:6, :5, 0], image[2, 5:8, 0].mean(), atol=1e-6)
+    whole = out[9:11, :, 1]
+    assert np.isfinite(out).all() and (whole > 0.2).all() and (whole < 0.8).all()
+    assert whole[0].mean() < whole[1].mean()  # nearer the row above, nearer its colour
+
+
 needs_contrib = pytest.mark.skipif(not has_contrib(), reason="needs OpenCV's contrib modules (cv2.xphoto): "
                                                                "opencv-contrib-python-headless is not installed")
 
@@ -277,8 +336,34 @@ def test_the_run_records_its_inpainter(tiny_run):
     """metrics.json's bg_prior names the 2D inpainter the default 'auto' became on this machine."""
     import json
     import os
+
+    from mi_voldis.fit.config import FitConfig
     with open(os.path.join(tiny_run, "metrics.json")) as f:
-        assert json.load(f)["bg_prior"]["inpainter"] == resolve("auto")
+        recorded = json.load(f)["bg_prior"]["inpainter"]
+    assert recorded == resolve(FitConfig().prior_inpainter) == resolve("auto")
+
+
+def test_a_blend_of_inpainters_is_the_mean_of_their_fills_and_names_its_parts(monkeypatch):
+    """'a+b' fills with the mean of a's and b's fills (known pixels kept), resolves 'auto' inside it, says
+    when that 'auto' falls back, and refuses an unknown part by name, in the settings as well."""
+    import cv2
+
+    from mi_voldis.fit.config import FitConfig
+    from mi_voldis.inpaint2d import fallback_note
+    image = np.random.default_rng(4).uniform(0, 1, (24, 30, 3)).astype(np.float32)
+    hole = np.zeros((24, 30), bool)
+    hole[7:15, 9:20] = True
+    both = inpainter("telea+lateral")(image, hole)
+    mean = (inpainter("telea")(image, hole).astype(np.float64) + inpainter("lateral")(image, hole)) / 2
+    np.testing.assert_allclose(both, mean, atol=1e-6)
+    assert not np.allclose(both[hole], inpainter("telea")(image, hole)[hole], atol=1e-3)
+    with pytest.raises(ValueError, match="unknown inpainter 'lama'"):
+        inpainter("lateral+lama")
+    with pytest.raises(ValueError, match="prior_inpainter must be one of auto.*joined by '\\+'"):
+        FitConfig.from_sources(None, ['prior_inpainter="lateral+lama"'])
+    monkeypatch.delattr(cv2, "xphoto", raising=False)
+    assert resolve("lateral+auto") == "lateral+telea" and fallback_note("lateral+auto") is not None
+    assert fallback_note("lateral+telea") is None
 
 
 def test_a_fit_without_its_inpainter_stops_before_fitting_anything(monkeypatch, tmp_path):

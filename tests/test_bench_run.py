@@ -109,7 +109,7 @@ def test_the_family_report_leads_with_the_check_halfs_worst_scene_not_the_tuning
 
 def test_the_family_section_offers_the_family_and_refuses_other_scenes():
     from mi_voldis.bench.run import section_scenes
-    assert section_scenes("family") == [f"family{k:02d}" for k in range(20)]
+    assert section_scenes("family") == [f"family{k:02d}" for k in range(24)]
     assert section_scenes("family", ["family03"]) == ["family03"]
     with pytest.raises(ValueError, match="random0 not among"):
         section_scenes("family", ["random0"])

@@ -104,7 +104,7 @@ def test_the_report_gives_the_mean_the_worst_scene_and_the_peers_rows_as_theirs(
 
 def test_the_section_offers_the_family_runs_its_check_half_by_default_and_refuses_others():
     from mi_voldis.bench.run import section_scenes
-    assert section_scenes("spinnerf") == [f"family{k}" for k in range(10, 20)]
+    assert section_scenes("spinnerf") == [f"family{k}" for k in range(10, 24)]
     assert section_scenes("spinnerf", ["family03", "family12"]) == ["family03", "family12"]
     for other in ("random0", "tabletop", "fern"):
         with pytest.raises(ValueError, match=f"{other} not among"):

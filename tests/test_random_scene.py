@@ -90,7 +90,8 @@ def test_a_path_rig_refuses_another_view_count(tmp_path):
 
 
 def test_the_family_split_is_fixed_disjoint_and_balanced_between_rigs():
-    assert len(family.TUNING) == len(family.CHECK) == family.SIZE // 2 >= 10
+    assert len(family.TUNING) == 10 and len(family.CHECK) >= 10
+    assert sorted(family.TUNING + family.CHECK) == list(range(family.SIZE))
     assert not set(family.TUNING) & set(family.CHECK)
     for half in (family.TUNING, family.CHECK):
         kinds = [family.scene(k)[1] for k in half]
@@ -98,8 +99,8 @@ def test_the_family_split_is_fixed_disjoint_and_balanced_between_rigs():
         assert forward == len(half) - forward  # forward-facing as often as orbits
     assert {family.half(k) for k in family.TUNING} == {"tuning"} and {family.half(k) for k in family.CHECK} == {"check"}
     assert family.index(family.name(13)) == 13 and family.index("random3") is None and family.index("family99") is None
-    with pytest.raises(ValueError, match="0 to 19"):
-        family.scene(20)
+    with pytest.raises(ValueError, match=f"0 to {family.SIZE - 1}"):
+        family.scene(family.SIZE)
 
 
 def test_make_dataset_family_writes_a_forward_facing_hand_held_dataset(tmp_path):
@@ -110,6 +111,7 @@ def test_make_dataset_family_writes_a_forward_facing_hand_held_dataset(tmp_path)
     assert (out / "poses_bounds.npy").is_file()
     ds = load_dataset(str(out))
     assert ds.masks is not None and ds.masks.any() and len(ds.cameras) == 20
-    bad = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "make_dataset.py"), "--family", "20", "--out",
-                          str(tmp_path / "x")], capture_output=True, text=True)
-    assert bad.returncode != 0 and "--family must be from 0 to 19" in bad.stderr and "Traceback" not in bad.stderr
+    bad = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "make_dataset.py"), "--family",
+                          str(family.SIZE), "--out", str(tmp_path / "x")], capture_output=True, text=True)
+    assert bad.returncode != 0 and f"--family must be from 0 to {family.SIZE - 1}" in bad.stderr
+    assert "Traceback" not in bad.stderr

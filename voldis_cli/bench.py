@@ -16,7 +16,7 @@ random seed with the default budgets (hours on 2 cores); --scenes picks some. --
 reports/removal.md instead: every background strategy on the bundled and random ground-truth scenes;
 --masks writes reports/masks.md: masks from two views (scripts/make_masks.py) and removal with them;
 --effects writes reports/effects.md: removal with the object's shadow given as effect masks;
---family fits the removal family (20 random scenes, mi_voldis/synth/family.py: ten tune, ten check) and
+--family fits the removal family (24 random scenes, mi_voldis/synth/family.py: ten tune, the rest check) and
 rewrites reports/removal.md to lead with the check half's worst scene (reports/family.json);
 --spinnerf writes reports/spinnerf.md: family scenes (default the check half) rendered in SPIn-NeRF's layout
 (make_dataset.py --layout spinnerf), fitted with the default command and scored with SPIn-NeRF's protocol
@@ -51,7 +51,7 @@ def main(argv=None):
     ap.add_argument("--effects", action="store_true",
                     help="only the effects section: removal with the object's shadow given as effect masks")
     ap.add_argument("--family", action="store_true",
-                    help="only the removal family: the default judged on ten scenes it was not tuned on")
+                    help="only the removal family: the default judged on the scenes it was not tuned on")
     ap.add_argument("--spinnerf", action="store_true",
                     help="only SPIn-NeRF's protocol on family scenes in its layout (default: the check half)")
     ap.add_argument("--lpips-weights", metavar="DIR",

@@ -9,8 +9,8 @@ The rig (cameras, resolution, the "moved" edit) comes from scenes/NAME.json; the
 --random composes a scene from the seed (mi_voldis/synth/random_scene.py: layout, object parts,
 materials, a mirror sometimes, an occluder sometimes, a shadow-casting light, a 360-degree or
 forward-facing rig) and keeps it in the dataset's scene/ folder. --family K makes scene K of the removal
-family (mi_voldis/synth/family.py: 20 harder random scenes, hand-held rigs, close walls, area lights;
-the first ten tune the defaults, the last ten judge them). --layout spinnerf writes SPIn-NeRF's
+family (mi_voldis/synth/family.py: 24 harder random scenes, hand-held rigs, close walls, area lights;
+the first ten tune the defaults, the rest judge them). --layout spinnerf writes SPIn-NeRF's
 LLFF layout: the first 40% of the views by name without the object (images_4/test_label/ marks where
 it stood), the rest with it (images_4/label/).
 """
@@ -22,10 +22,12 @@ from .boundary import add_debug, positive, run
 
 
 def main(argv=None):
+    from mi_voldis.synth import family
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scene", nargs="?", help="Mitsuba XML scene whose object shapes have ids starting with 'object'")
     ap.add_argument("--random", type=int, metavar="SEED", help="a random scene made from SEED instead of SCENE")
-    ap.add_argument("--family", type=int, metavar="K", help="scene K (0 to 19) of the removal family instead of SCENE")
+    ap.add_argument("--family", type=int, metavar="K",
+                    help=f"scene K (0 to {family.SIZE - 1}) of the removal family instead of SCENE")
     ap.add_argument("--out", required=True, help="output dataset folder (replaced when complete)")
     ap.add_argument("--views", type=positive, help="number of views")
     ap.add_argument("--res", help="resolution WxH, e.g. 160x120")
@@ -51,7 +53,6 @@ def main(argv=None):
             ap.error(f"--res must look like 160x120, got '{args.res}'")
     if sum(x is not None for x in (args.scene, args.random, args.family)) != 1:
         ap.error("give a SCENE file, --random SEED or --family K (one of them)")
-    from mi_voldis.synth import family
     if args.family is not None and not 0 <= args.family < family.SIZE:
         ap.error(f"--family must be from 0 to {family.SIZE - 1}, got {args.family}")
     if args.random is not None and args.random < 0:

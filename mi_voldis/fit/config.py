@@ -7,6 +7,7 @@ defaults are in reports/notes.md.
 """
 from dataclasses import dataclass
 
+from ..inpaint2d import INPAINTERS, name_problem
 from ..settings import Settings, setting
 
 
@@ -23,6 +24,12 @@ def _schedule_error(schedule):
     if steps[0] != 0 or any(b <= a for a, b in zip(steps, steps[1:])) or min(p[1] for p in schedule) < 2:
         return what
     return None
+
+
+def _inpainter_error(value):
+    if isinstance(value, str) and name_problem(value) is None:
+        return None
+    return f"one of auto, {', '.join(INPAINTERS)}, or several of them joined by '+' (e.g. \"lateral+auto\")"
 
 
 def _minutes_error(value):
@@ -242,11 +249,15 @@ class FitConfig(Settings):
     prior_views: int = setting(4, "reference views inpainted and lifted in turn, each where the background "
                                   "still has a hole (bg_strategy 'lift')", low=1)
     prior_inpainter: str = setting("auto", "2D inpainter of the prior's views ('guided': every masked view, "
-                                               "'lift': the reference views): 'telea' or 'ns' (OpenCV), 'fsr' "
-                                               "(OpenCV contrib's frequency-selective reconstruction), "
-                                               "'membrane' (harmonic), 'auto' ('fsr' where OpenCV has its contrib "
-                                               "modules, else 'telea'; metrics.json: bg_prior.inpainter)",
-                                   choices=("auto", "telea", "ns", "fsr", "membrane"))
+                                           "'lift': the reference views): 'telea' or 'ns' (OpenCV), 'fsr' (OpenCV "
+                                           "contrib's frequency-selective reconstruction), 'membrane' (harmonic), "
+                                           "'lateral' (each row across the hole from the colours beside it: the "
+                                           "bands behind an object, not what stands under it), 'auto' ('fsr' where "
+                                           "OpenCV has its contrib modules, else 'telea'; metrics.json: "
+                                           "bg_prior.inpainter), or several joined by '+': the mean of their fills "
+                                           "('lateral+auto' raised the removal family's worst tuning scene but "
+                                           "lowered the worst of the scenes added to judge it: reports/notes.md)",
+                                   check=_inpainter_error)
     hull_dilation: float = setting(0.03, "mask dilation for the visual hull, fraction of image diagonal",
                                    low=0, high=1)
     hull_min_views: float = setting(0.9, "a cell is in the hull if inside the dilated mask in this fraction of "
