@@ -578,9 +578,11 @@ def test_a_lifted_surface_looks_the_same_from_every_view():
 
 
 SHADOW = (np.array([0.55, 0.0]), 0.15)  # centre (x, z) and radius of the sphere's shadow on the floor
+CONTACT = 0.31  # radius about the sphere's foot (x = z = 0) of its contact shadow on the floor
 
 
-def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_raw=4.0, empty=-20.0, shadow=False):
+def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_raw=4.0, empty=-20.0, shadow=False,
+                           contact=False):
     """A textured floor with a red sphere standing on it: the photos rendered from the truth, with exact
     masks and the ground-truth background (the floor alone), and as the fitted full field the truth
     plus a faint red haze around the sphere, as fits leave; ``hidden_floor``: without the floor under
@@ -588,7 +590,9 @@ def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_r
     sphere's raw density (the floor's is 4); ``empty``: the raw density of empty space in the full
     field (a fit leaves about -7, opacity 1e-3 per voxel, where the gradient still flows); ``shadow``:
     the floor darkened in a disc beside the sphere (:data:`SHADOW`) in the photos and the full field but
-    not in the ground-truth background, and the dataset's effect masks where the photos differ from it."""
+    not in the ground-truth background, and the dataset's effect masks where the photos differ from it;
+    ``contact``: the floor darkened within :data:`CONTACT` of the sphere's foot the same way (its contact
+    shadow, which views see beside its silhouette), without effect masks."""
     from mi_voldis.fit.fields import FitInputs
     from mi_voldis.fit.state import FitState
     from mi_voldis.optim.adam import Adam
@@ -604,6 +608,7 @@ def synthetic_object_scene(views=10, size=(40, 30), hidden_floor=False, sphere_r
     texture = np.stack([0.3 + 0.3 * (np.sin(6 * pts[:, 0]) > 0), 0.5 + 0.2 * np.cos(5 * pts[:, 2]),
                         np.full(len(pts), 0.35)], -1)
     shade = np.where(shadow & (np.hypot(pts[:, 0] - SHADOW[0][0], pts[:, 2] - SHADOW[0][1]) < SHADOW[1]), 0.4, 1.0)
+    shade *= np.where(contact & (np.hypot(pts[:, 0], pts[:, 2]) < CONTACT), 0.4, 1.0)
     dense, haze = 4.0, -3.0  # haze: about 13% opaque across its three voxels
     width = full.width
     out = {}
@@ -703,12 +708,12 @@ def sphere_seen_unmasked(ds, pts, voxel, centre, radius=0.3, grow=1):
     return seen
 
 
-def guided_removal(tmp_path, shadow=False, effects=True, **settings):
+def guided_removal(tmp_path, shadow=False, effects=True, contact=False, **settings):
     """The synthetic sphere's full field and the inputs and state after the guided background refit;
     ``shadow``: with the sphere's shadow (:func:`synthetic_object_scene`), given as effect masks if
-    ``effects``."""
+    ``effects``; ``contact``: with its contact shadow."""
     from mi_voldis.fit.train import fit
-    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene(shadow=shadow)
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene(shadow=shadow, contact=contact)
     ds.effects = ds.effects if effects else None
     cfg = cfg.replace(**{"bg_strategy": "guided", "steps_bg": 30, **settings})
     state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, cfg.adam_beta1, cfg.adam_beta2),
@@ -791,6 +796,47 @@ def test_a_shadow_given_as_effect_masks_leaves_with_the_object_and_the_floor_kee
     assert np.array_equal(density_of(state.fields["bg"])[under], density_of(full)[under])
     colour = np.array(state.fields["bg"].data).reshape(-1, full.width)[:, 1:4]
     assert (colour[under] > np.array(full.data).reshape(-1, full.width)[under, 1:4]).mean() > 0.5  # brighter
+
+
+def test_the_contact_shadow_beside_the_silhouette_leaves_with_the_object(tmp_path):
+    """The sphere's contact shadow (the floor 60% darker within :data:`CONTACT` of its foot, not in the
+    truth) shows just below its silhouette in the photos, where no mask covers it. Every pixel of the dark
+    fringe found there is one the object changed (the photo off the truth). They leave L_bg for the prior:
+    on the held-out views' own fringe (:func:`~mi_voldis.fit.fringe.dark_fringe`) the background is nearer
+    the truth than the one fitted without it and than the photos. With ``fringe_unseen`` no view counts as
+    seeing the background through them (more of the hull is refilled). Without a contact shadow a few
+    pixels of the sphere's soft edge are found, not the textured floor."""
+    import dataclasses
+
+    from mi_voldis.fit.background import background_ray_pool, background_regions
+    from mi_voldis.fit.fields import fit_integrator
+    from mi_voldis.fit.fringe import dark_fringe
+    errors, photos = {}, None
+    for contrast in (0.0, 0.1):
+        ds, full, inputs, state = guided_removal(tmp_path / str(contrast), contact=True, steps_bg=100,
+                                                 shadow_contrast=0.0, fringe_contrast=contrast)
+        bg = fit_integrator(inputs, state)
+        fringes = {v: dark_fringe(ds.images[v], ds.masks[v], 2, 0.1) for v in ds.test}
+        errors[contrast] = np.mean([np.abs(np.clip(render_camera(bg, ds.cameras[v], ("bg",))["bg"][0], 0, 1)
+                                           - ds.backgrounds[v])[fringes[v]].mean() for v in ds.test])
+        photos = np.mean([np.abs(ds.images[v] - ds.backgrounds[v])[fringes[v]].mean() for v in ds.test])
+    record, fringe = state.prior["fringe"], inputs.ds.effects
+    assert record["pixels"] > 50 and record["views"] >= len(ds.masked_train) // 2, record
+    changed = np.abs(ds.images - ds.backgrounds).max(-1) > 0.05
+    assert not (fringe & ~changed).any()
+    pool = background_ray_pool(ds, inputs.bank, inputs.cfg.bg_ray_dilation, fringe)
+    assert not fringe[inputs.bank.views].reshape(-1)[pool].any()
+    assert errors[0.1] < 0.9 * errors[0.0] and errors[0.1] < 0.7 * photos, (errors, photos)
+    # with fringe_unseen no view sees the background through the fringe: the hull vertices seen only there
+    # are refilled too; without it (the default) the hull is divided as without a fringe
+    assert inputs.fringe is not None and np.array_equal(inputs.fringe, fringe)
+    refilled = {k: np.array(background_regions(dataclasses.replace(inputs, fringe=f, cfg=cfg), state)[3])
+                for k, f, cfg in (("unseen", inputs.fringe, inputs.cfg.replace(fringe_unseen=True)),
+                                  ("without", None, inputs.cfg), ("default", inputs.fringe, inputs.cfg))}
+    assert (refilled["unseen"] >= refilled["without"]).all() and refilled["unseen"].sum() > refilled["without"].sum()
+    assert np.array_equal(refilled["default"], refilled["without"])
+    _, _, _, state = guided_removal(tmp_path / "none", steps_bg=0, shadow_contrast=0.0)
+    assert state.prior["fringe"]["pixels"] < 0.2 * record["pixels"], (state.prior["fringe"], record)
 
 
 def test_a_shadow_no_light_explains_is_not_searched_into_the_removal(tmp_path):
@@ -1013,7 +1059,8 @@ def test_the_colour_prior_continues_the_wall_behind_not_the_occluder():
 
 def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only(tmp_path):
     """The prior's rays are exactly the grown masks' pixels of the masked training views (a view without
-    a mask gives none), their colours each view's 2D inpainting there; the refit with it changes
+    a mask gives none) and their effect masks' (here the sphere's dark fringe), their colours each view's
+    2D inpainting there; the refit with it changes
     nothing the views see outside the masks by more than 2/255 beyond what the harmonic refit changes."""
     from mi_voldis.fit.fields import fit_integrator
     from mi_voldis.fit.guide import colour_prior
@@ -1036,7 +1083,9 @@ def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only
         renders[strategy] = {v: render_camera(integ, ds.cameras[v], ("bg",))["bg"][0] for v in ds.test}
     bank, pool = colour_prior(inputs, state, "telea")
     grow = int(np.ceil(0.01 * np.hypot(*ds.size)))
-    expected = np.stack([dilate(ds.masks[v], grow) if v != unmasked else np.zeros(ds.size, bool) for v in ds.train])
+    effects = inputs.ds.effects if inputs.ds.effects is not None else np.zeros(ds.masks.shape, bool)
+    expected = np.stack([dilate(ds.masks[v], grow) | effects[v] if v != unmasked else np.zeros(ds.size, bool)
+                         for v in ds.train])
     np.testing.assert_array_equal(np.sort(pool), np.flatnonzero(expected.reshape(-1)))
     colours = np.array(bank.colors).reshape(len(ds.train), *ds.size, 3)
     for k, v in enumerate(ds.train):

@@ -38,8 +38,8 @@ PREVIEWS = 4  # held-out views previewed when the dataset has neither ground tru
 BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
                        "object_front", "hole_carve", "hole_carve_margin", "hole_carve_behind",
                        "keep_seen", "keep_seen_gap", "hull_color_fill", "hull_fill_vertical",
-                       "hull_occluders", "shadow_contrast", "bg_lr_density", "bg_lr_color", "bg_tv_density",
-                       "bg_tv_color")
+                       "hull_occluders", "shadow_contrast", "fringe_contrast", "fringe_width", "fringe_unseen",
+                       "bg_lr_density", "bg_lr_color", "bg_tv_density", "bg_tv_color")
 
 
 def out_problem(out, run, dataset):

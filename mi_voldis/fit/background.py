@@ -88,15 +88,18 @@ def with_opacity(inputs, state, field, region, alpha):
 def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
     """Bool per stored vertex of ``field``: among ``candidates`` (Bool per stored vertex), those no
     training view of ``depth`` (view -> full-field depth map) has in view unmasked
-    (:func:`~mi_voldis.fit.visibility.in_view`: outside its mask, grown by ``edge`` pixels as a vertex
-    is a point and a mask a set of pixel centres, and not behind something nearer): the strict visual
-    hull, where an occluder in front of the object in some view does not make its cells count."""
+    (:func:`~mi_voldis.fit.visibility.in_view`: outside its mask and, with ``fringe_unseen``, the
+    object's dark fringe beside it (``inputs.fringe``: those pixels show the object's soft edge), grown by
+    ``edge`` pixels as a vertex is a point and a mask a set of pixel centres, and not behind something
+    nearer): the strict visual hull, where an occluder in front of the object in some view does not make
+    its cells count."""
     ds = inputs.ds
     pts_scene, real = vertex_positions(field)
     pick = np.flatnonzero(np.array(candidates) & real)
     views = list(depth)
+    shown = ds.masks if inputs.fringe is None or not inputs.cfg.fringe_unseen else ds.masks | inputs.fringe
     seen = in_view(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
-                   [depth[v] for v in views], [dilate(ds.masks[v], edge) for v in views], tol=tol)
+                   [depth[v] for v in views], [dilate(shown[v], edge) for v in views], tol=tol)
     out = np.zeros(len(pts_scene), bool)
     out[pick[~seen]] = True
     return mi.Bool(out)
@@ -301,14 +304,15 @@ def background_ray_pool(ds, bank, dilation, effects=None):
 def effect_cells(inputs, state):
     """Bool per stored vertex of the full field: the cells the rays of the effect masks (the object's
     shadow, :attr:`~mi_voldis.data.types.Dataset.effects`) sample until their surface (transmittance
-    above 5%, :func:`masked_ray_cells`): the surfaces whose colour the photos show changed by the
-    object. Their geometry stays the full field's, which every view sees."""
+    above 5%, :func:`masked_ray_cells`, the effect masks not eroded: the dark fringe beside a mask is a pixel
+    or two wide): the surfaces whose colour the photos show changed by the object. Their geometry stays the
+    full field's, which every view sees."""
     ds = inputs.ds
     views = [v for v in ds.masked_train if ds.effects[v].any()]
     if not views:
         return dr.zeros(mi.Bool, state.fields["full"].vertices)
     shadow = dataclasses.replace(inputs, ds=dataclasses.replace(ds, masks=ds.effects))
-    return masked_ray_cells(shadow, state, views)[0]
+    return masked_ray_cells(shadow, state, views, erode=0)[0]
 
 
 def clear_empty_background_color(inputs, state, region=None):

@@ -64,12 +64,12 @@ class FitConfig(Settings):
     # settings added since runs were first recorded, at the values those runs were fitted with (not a field:
     # no annotation): plans before host_ms had no host term; background refits before bg_lr_* / bg_tv_*
     # stepped with the then default rates and TV weights, and filled the hull isotropically; degree-1 colour
-    # before sh_color was RGB
+    # before sh_color was RGB; backgrounds before fringe_contrast kept the dark fringe
     ADDED = {"sh_color": "rgb", "host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4,
              "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
-             "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0}
+             "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0, "fringe_contrast": 0.0}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -301,6 +301,19 @@ class FitConfig(Settings):
                                           "edge by at least this much in log luminance (0.5: 39% darker) in "
                                           "every channel, pooled and in two thirds of the views that see it; "
                                           "0: off", low=0)
+    fringe_contrast: float = setting(0.1, "the object's dark fringe leaves with it (bg_strategy 'guided'): pixels "
+                                          "within fringe_width of a mask darker in every channel than the 2D fill "
+                                          "from beyond that band by at least this in log, and darker than every "
+                                          "pixel beyond it near them (its contact shadow, its dark soft edge; not a "
+                                          "dark texture, mi_voldis.fit.fringe) join the effect masks; 0: off",
+                                     low=0)
+    fringe_width: float = setting(0.03, "the band beside the masks searched for the dark fringe, fraction of the "
+                                        "image diagonal", above=0, high=1)
+    fringe_unseen: bool = setting(False, "no view sees the background through the dark fringe: the hull vertices "
+                                         "seen only there (the object's soft edge) are refilled with the hole instead "
+                                         "of kept, not only left out of L_bg (off by default: it took family22 from "
+                                         "-10.9 to -5.7 dB under Telea, but the foreground's coverage spilled past "
+                                         "the object on the removal family's tuning half, reports/notes.md)")
     hull_color_fill: bool = setting(False, "with keep_seen, the hull vertices the fill inpaints take their colour "
                                            "from outside the hull alone, not from the vertices views see in it "
                                            "(those keep their own): beside the object's silhouette these hold the "

@@ -26,7 +26,8 @@ SAMPLE_CUT_SHARE = 0.01
 @dataclass(frozen=True)
 class FitInputs:
     """What a fit reads and never changes: the dataset, the settings, the scene box and space the fields
-    live in, the training rays, the checkpoint file and whether to show progress."""
+    live in, the training rays, the checkpoint file, whether to show progress, and (found as the background
+    starts) the object's dark fringe beside its masks ((N, H, W) bool or None, :mod:`mi_voldis.fit.fringe`)."""
     ds: Dataset
     cfg: FitConfig
     box: SceneBox
@@ -34,6 +35,7 @@ class FitInputs:
     bank: RayBank
     checkpoint: str
     progress: bool = True
+    fringe: np.ndarray | None = None
 
     @classmethod
     def of(cls, dataset, cfg, checkpoint, progress=True):

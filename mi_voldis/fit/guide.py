@@ -63,15 +63,22 @@ def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9, dept
         if v not in masked:
             continue
         region[k] = dilate(ds.masks[v], grow) | (ds.effects[v] if ds.effects is not None else False)
-        if depths is not None and v in depths:
-            depth, hit = np.nan_to_num(depths[v]), np.isfinite(depths[v])
-        else:
-            depth, hit = median_depth(integrator, ds.cameras[v])
-            if depths is not None:
-                depths[v] = np.where(hit, depth, np.nan)
-        hole = inpainting_hole(region[k], depth, hit, ds.masks[v], around, nearer)
+        depth = view_depth(integrator, ds, v, depths)
+        hole = inpainting_hole(region[k], np.nan_to_num(depth), np.isfinite(depth), ds.masks[v], around, nearer)
         images[k] = paint(np.clip(ds.images[v], 0, 1), hole)
     inpainted = dataclasses.replace(ds, images=images, cameras=[ds.cameras[v] for v in train], masks=region,
                                     split=np.array(["train"] * len(train)), masked=None, effects=None,
                                     ignore=None if ds.ignore is None else ds.ignore[train])
     return RayBank(inpainted, np.arange(len(train))), np.flatnonzero(region.reshape(-1)).astype(np.uint32)
+
+
+def view_depth(integrator, ds, v, memo=None):
+    """The full field's median depth map of view ``v`` of ``ds`` (NaN where no surface), rendered with
+    ``integrator``; ``memo``: a dict of such maps by view, read and filled."""
+    if memo is not None and v in memo:
+        return memo[v]
+    depth, hit = median_depth(integrator, ds.cameras[v])
+    depth = np.where(hit, depth, np.nan)
+    if memo is not None:
+        memo[v] = depth
+    return depth

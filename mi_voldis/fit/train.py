@@ -23,8 +23,9 @@ Phases (``bg_strategy``):
   the inpainting's sources; weight ``prior_weight`` against 1 for L_bg, :mod:`mi_voldis.fit.guide`):
   what no view sees becomes the views' consensus instead of the harmonic fill's blend. With effect masks
   (the dataset's ``effects``: the object's shadow on the rest of the scene; without them, the shadow
-  found from the object's shape and the photos, :mod:`mi_voldis.fit.shadow`), their pixels leave L_bg and
-  join the prior's, and the surfaces under them are refitted in colour alone
+  found from the object's shape and the photos, :mod:`mi_voldis.fit.shadow`), and the object's dark fringe
+  beside its masks (its contact shadow and dark soft edge, :mod:`mi_voldis.fit.fringe`), their pixels leave
+  L_bg and join the prior's, and the surfaces under them are refitted in colour alone
   (:func:`~mi_voldis.fit.background.effect_cells`): the shadow leaves with the object, the floor stays.
 * ``lift``: the same full field; the background starts as a copy of it with the part of the object's
   visual hull (from the masks) no training view sees unmasked emptied, only hull cells are refitted
@@ -64,8 +65,9 @@ from .background import (
     start_cleared,
     start_harmonic,
 )
-from .fields import FitInputs, init_fields, refits_background
-from .guide import colour_prior
+from .fields import FitInputs, fit_integrator, init_fields, refits_background
+from .fringe import find_fringe
+from .guide import colour_prior, view_depth
 from .hull import check_hull
 from .lift import keys_mask, lift_prior
 from .problem import FieldFit
@@ -137,6 +139,8 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         harmonic = cfg.bg_strategy in ("harmonic", "guided")
         regions = None
         depths = {}  # the full field's median depth maps by view: its regions, shadow and prior each ask for them
+        if cfg.bg_strategy == "guided" and cfg.fringe_contrast > 0:  # its contact shadow and dark soft edge
+            inputs = dataclasses.replace(inputs, fringe=object_fringe(inputs, state, depths, progress))
         if "bg" not in state.fields or state.hull_points is None:
             if harmonic:
                 regions = start_harmonic(inputs, state, depths)
@@ -169,6 +173,9 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
                     print(f"note: the object's shadow found ({100 * (1 - np.exp(-light['contrast'])):.0f}% darker "
                           f"than beside it, light at {np.round(light['light'], 2).tolist()}): it leaves with the "
                           "object (--set shadow_contrast=0 keeps it)", file=sys.stderr)
+        if inputs.fringe is not None:  # the object's fringe leaves with it as its shadow does
+            effects = inputs.fringe if effects is None else effects | inputs.fringe
+            inputs = dataclasses.replace(inputs, ds=dataclasses.replace(dataset, effects=effects))
         if effects is not None:  # the surfaces under the object's shadow: their colour alone is refitted
             shaped = free if shaped is None else shaped
             free = dr.select(effect_cells(inputs, state), 1.0, free)
@@ -193,6 +200,25 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
     dr.flush_malloc_cache()  # the checkpoint, the evaluation and the export that follow allocate arrays of other sizes
     state.save(checkpoint, "done", 0)
     return inputs, state
+
+
+def object_fringe(inputs, state, depths, progress):
+    """The object's dark fringe beside its masks ((N, H, W) bool, :mod:`mi_voldis.fit.fringe`; None where none
+    is found), recorded in ``state.prior['fringe']``; ``depths``: the full field's median depth maps by view,
+    read and filled."""
+    ds, cfg = inputs.ds, inputs.cfg
+    integrator = fit_integrator(inputs, state)
+    for v in ds.masked_train:
+        view_depth(integrator, ds, v, depths)
+    fringe = find_fringe(ds, cfg.fringe_width, cfg.fringe_contrast, depths)
+    found = 0 if fringe is None else int(fringe.sum())
+    record = {"pixels": found, "views": 0 if fringe is None else int(fringe.any(axis=(1, 2)).sum())}
+    state.prior = {**(state.prior or {}), "fringe": record}
+    if fringe is not None and progress:
+        print(f"note: the object's dark fringe found beside its masks ({found} pixels in {record['views']} views: "
+              "its contact shadow, its dark edge): it leaves with the object (--set fringe_contrast=0 keeps it)",
+              file=sys.stderr)
+    return fringe
 
 
 def check_inpainter(fill, progress=True):
