@@ -311,9 +311,9 @@ class FitConfig(Settings):
                                         "image diagonal", above=0, high=1)
     fringe_unseen: bool = setting(False, "no view sees the background through the dark fringe: the hull vertices "
                                          "seen only there (the object's soft edge) are refilled with the hole instead "
-                                         "of kept, not only left out of L_bg (off by default: it took family22 from "
-                                         "-10.9 to -5.7 dB under Telea, but the foreground's coverage spilled past "
-                                         "the object on the removal family's tuning half, reports/notes.md)")
+                                         "of kept, not only left out of L_bg (off by default: it removes more of a "
+                                         "box's outline, but the foreground's coverage then spills past the object; "
+                                         "reports/notes.md)")
     hull_color_fill: bool = setting(False, "with keep_seen, the hull vertices the fill inpaints take their colour "
                                            "from outside the hull alone, not from the vertices views see in it "
                                            "(those keep their own): beside the object's silhouette these hold the "

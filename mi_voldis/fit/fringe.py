@@ -41,7 +41,7 @@ def dark_fringe(image, mask, width, contrast, depth=None, fill=None):
     (H, W, 3+) in [0, 1], ``mask`` (H, W) bool, ``width`` the band in pixels, ``contrast`` the log
     step; ``depth`` (H, W) the full field's median depth (NaN where no surface), to leave occluders out;
     ``fill`` the 2D inpainter (default Telea)."""
-    rgb = np.clip(np.asarray(image, np.float32)[..., :3], 0, 1)
+    rgb = np.clip(np.nan_to_num(np.asarray(image, np.float32)[..., :3]), 0, 1)
     hole = dilate(mask, width)
     band = hole & ~mask
     if not band.any() or hole.all():
