@@ -17,9 +17,14 @@ from mi_voldis.bench import family  # noqa: E402
 def main(argv):
     if len(argv) not in (2, 3):
         raise SystemExit(__doc__.strip().splitlines()[-1].strip())
+    chosen = argv[2].split(",") if len(argv) == 3 else None
+    missing = [s for s in family.scenes(chosen)
+               if not os.path.isfile(os.path.join(argv[0], "removal", s, "guided", "metrics.json"))
+               or not os.path.isfile(os.path.join(argv[0], "runs", f"{s}_0", "metrics.json"))]
+    if missing:  # this script reports what was fitted; it must not start the family's fits
+        raise SystemExit(f"report.py: {argv[0]} holds no fit or default row of {', '.join(missing)}")
     family.STRATEGIES["tuning"] = ["guided"]
     family.ROWS = ["guided"]
-    chosen = argv[2].split(",") if len(argv) == 3 else None
     results = family.run_family(os.path.abspath(argv[0]), argv[1], chosen)
     print(family.write_family(results, argv[1], "python scripts/bench.py --family"))
 
