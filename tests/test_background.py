@@ -1,4 +1,6 @@
 """The background prior and its pieces: disparity fill, visibility, the lifted surface, residue-free removal."""
+import dataclasses
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -827,16 +829,81 @@ def test_the_contact_shadow_beside_the_silhouette_leaves_with_the_object(tmp_pat
     pool = background_ray_pool(ds, inputs.bank, inputs.cfg.bg_ray_dilation, fringe)
     assert not fringe[inputs.bank.views].reshape(-1)[pool].any()
     assert errors[0.1] < 0.9 * errors[0.0] and errors[0.1] < 0.7 * photos, (errors, photos)
-    # with fringe_unseen no view sees the background through the fringe: the hull vertices seen only there
-    # are refilled too; without it (the default) the hull is divided as without a fringe
+    # with fringe_unseen (the default) no view sees the background through the fringe: the hull vertices
+    # seen only there are refilled too; without it the hull is divided as without a fringe
     assert inputs.fringe is not None and np.array_equal(inputs.fringe, fringe)
     refilled = {k: np.array(background_regions(dataclasses.replace(inputs, fringe=f, cfg=cfg), state)[3])
-                for k, f, cfg in (("unseen", inputs.fringe, inputs.cfg.replace(fringe_unseen=True)),
-                                  ("without", None, inputs.cfg), ("default", inputs.fringe, inputs.cfg))}
-    assert (refilled["unseen"] >= refilled["without"]).all() and refilled["unseen"].sum() > refilled["without"].sum()
-    assert np.array_equal(refilled["default"], refilled["without"])
+                for k, f, cfg in (("default", inputs.fringe, inputs.cfg), ("without", None, inputs.cfg),
+                                  ("kept", inputs.fringe, inputs.cfg.replace(fringe_unseen=False)))}
+    assert (refilled["default"] >= refilled["without"]).all()
+    assert refilled["default"].sum() > refilled["without"].sum()
+    assert np.array_equal(refilled["kept"], refilled["without"])
     _, _, _, state = guided_removal(tmp_path / "none", steps_bg=0, shadow_contrast=0.0)
     assert state.prior["fringe"]["pixels"] < 0.2 * record["pixels"], (state.prior["fringe"], record)
+
+
+def test_the_denser_of_two_fields_takes_the_density_alone_and_only_in_its_region():
+    """:func:`~mi_voldis.fit.background.denser` on packed values of width 3 (density, two colours): in
+    the region the density is the larger of the two, everywhere else and in every colour channel the
+    filled values'; the kept values are not written."""
+    from mi_voldis.fit.background import denser
+    kept = np.array([1.0, 9.0, 9.0, 5.0, 9.0, 9.0, -2.0, 9.0, 9.0, 3.0, 9.0, 9.0])
+    filled = np.array([2.0, 0.1, 0.2, 4.0, 0.3, 0.4, -3.0, 0.5, 0.6, 0.0, 0.7, 0.8])
+    before = mi.Float(kept)
+    out = np.array(denser(before, mi.Float(filled), 3, mi.Bool([True, True, False, True])))
+    np.testing.assert_array_equal(out, np.float32([2.0, 0.1, 0.2, 5.0, 0.3, 0.4, -3.0, 0.5, 0.6, 3.0, 0.7, 0.8]))
+    np.testing.assert_array_equal(np.array(before), kept)
+
+
+def test_what_views_see_only_through_the_fringe_is_refilled_but_never_thinned(tmp_path):
+    """The sphere's contact shadow is its fringe. The hull vertices that views see unmasked only through
+    it (:func:`~mi_voldis.fit.background.fringe_vertices`: the sphere's soft edge and the floor by its
+    foot) start the background refilled: in colour the hull's fill, in density the larger of the full
+    field's and the fill's. The floor among them (raw density 4, as the fill continues it) is made
+    alternately denser (8: a lip the fill would thin, moving the surface behind the full field's so that
+    the foreground, the sample-wise max(w_full - w_bg, 0), would spill onto it; it stays) and thinner
+    (1: the outline's thinned floor, which the fill mends). With ``fringe_unseen`` off they start as the
+    full field holds them, but for those within ``keep_seen_gap`` of the object's voxels."""
+    from mi_voldis.field_state import density_of, neighbour_vertices
+    from mi_voldis.fit.background import (
+        background_regions,
+        fill_weights,
+        fringe_vertices,
+        harmonic_fill,
+        start_harmonic,
+    )
+    ds, full, inputs, state = guided_removal(tmp_path, contact=True, steps_bg=0, shadow_contrast=0.0)
+    assert inputs.fringe is not None and inputs.cfg.fringe_unseen  # the default
+    neighbours = neighbour_vertices(full)
+    hull, _, obj, _ = background_regions(inputs, state, neighbours)
+    edge = np.array(fringe_vertices(inputs, state, hull, {})) & ~np.array(obj)
+    floor = np.flatnonzero(edge & (np.abs(density_of(full) - 4.0) < 1e-3))
+    assert len(floor) > 20, len(floor)
+    data = np.array(full.data).reshape(-1, full.width)
+    data[floor[0::2], 0], data[floor[1::2], 0] = 8.0, 1.0
+    state.fields["full"] = full = full.with_data(mi.Float(data.reshape(-1)))
+    starts = {}
+    for unseen in (False, True):
+        start_harmonic(dataclasses.replace(inputs, cfg=inputs.cfg.replace(fringe_unseen=unseen)), state)
+        starts[unseen] = state.fields["bg"]
+    hull, points, obj, refill = background_regions(inputs, state, neighbours)
+    edge = np.array(fringe_vertices(inputs, state, hull, {})) & ~np.array(obj)
+    plain = harmonic_fill(full.bricks_data(), full.width, dr.select(refill, hull, 0.0), neighbours,
+                          weights=fill_weights(inputs, full, points))
+    plain = np.array(plain).reshape(-1, full.width)[:full.vertices]
+    kept, refilled = density_of(full), density_of(starts[True])
+    lip, thin = np.intersect1d(floor[0::2], np.flatnonzero(edge)), np.intersect1d(floor[1::2], np.flatnonzero(edge))
+    assert len(lip) > 10 and len(thin) > 10, (len(lip), len(thin))
+    assert (plain[lip, 0] < 7.0).mean() > 0.5 and (plain[thin, 0] > 2.0).mean() > 0.5  # what the fill alone does
+    np.testing.assert_allclose(refilled[edge], np.maximum(kept, plain[:, 0])[edge], atol=1e-5)
+    np.testing.assert_allclose(refilled[lip], 8.0, atol=1e-5)
+    colour = np.array(starts[True].data).reshape(-1, full.width)[:full.vertices]
+    np.testing.assert_allclose(colour[edge, 1:4], plain[edge, 1:4], atol=1e-5)
+    assert np.abs(colour[edge, 1:4] - data[:full.vertices][edge, 1:4]).max() > 0.1
+    off = dataclasses.replace(inputs, cfg=inputs.cfg.replace(fringe_unseen=False))
+    kept_off = edge & ~np.array(background_regions(off, state, neighbours)[3])  # not the object's soft edge
+    assert kept_off.sum() > 0.5 * edge.sum()
+    np.testing.assert_array_equal(density_of(starts[False])[kept_off], kept[kept_off])
 
 
 def test_a_shadow_no_light_explains_is_not_searched_into_the_removal(tmp_path):

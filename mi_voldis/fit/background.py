@@ -105,6 +105,35 @@ def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
     return mi.Bool(out)
 
 
+def fringe_vertices(inputs, state, hull, depths):
+    """Bool per stored vertex of the full field: the hull vertices (``hull``: Float per vertex) that
+    training views see unmasked only through the object's dark fringe (``inputs.fringe``), unseen once
+    it counts as masked (:func:`never_seen`); ``depths``: the full field's median depth maps by view,
+    read and filled (:func:`~mi_voldis.fit.lift.training_depths`)."""
+    from .lift import training_depths
+    full = state.fields["full"]
+    depth = training_depths(inputs, state, median=True, memo=depths)
+    loose = dataclasses.replace(inputs, cfg=inputs.cfg.replace(fringe_unseen=True))
+    return (never_seen(loose, full, hull > 0, depth)
+            & ~never_seen(dataclasses.replace(inputs, fringe=None), full, hull > 0, depth))
+
+
+def denser(kept, filled, width, region):
+    """Packed values ``filled`` with the density (channel 0) in ``region`` (Bool per vertex) the larger of
+    ``kept``'s and ``filled``'s, and their colour ``filled``'s.
+
+    For the vertices seen only through the object's fringe (:func:`fringe_vertices`). Where the fill is
+    denser, the surface there was the object's thinned edge or its dark outline on the floor, and the
+    fill mends it. Where the fill is thinner it would move the surface the full field holds there by a
+    vertex, and the foreground, the sample-wise max(w_full - w_bg, 0), would then show the moved part as
+    object beside it (on the removal family: coverage spilling a pixel past the object)."""
+    index = dr.arange(mi.UInt32, dr.width(region)) * width
+    old, new = dr.gather(mi.Float, kept, index), dr.gather(mi.Float, filled, index)
+    out = dr.copy(filled)
+    dr.scatter(out, dr.select(region, dr.maximum(old, new), new), index)
+    return out
+
+
 def allocate_hidden_surface(inputs, state, depth, stride=2):
     """The full field with bricks allocated (empty) where the hidden surface's shell lies
     (:func:`hole_shell`): along the rays of every ``stride``-th masked pixel of the masked views of
@@ -156,12 +185,15 @@ def start_harmonic(inputs, state, depths=None):
             depths.clear()
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
+    depths = {} if depths is None else depths  # rendered once for the regions and the fringe's vertices
     hull, points, obj, refill, solid = background_regions(inputs, state, neighbours, with_solid=True, depths=depths)
     region = dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull
     weights = fill_weights(inputs, full, points)
     data = full.bricks_data()
     values = (hull_fill(data, full.width, region, hull, neighbours, weights) if inputs.cfg.hull_color_fill
               else harmonic_fill(data, full.width, region, neighbours, weights=weights))
+    if inputs.fringe is not None and inputs.cfg.fringe_unseen:  # what views see only through the fringe
+        values = denser(data, values, full.width, fringe_vertices(inputs, state, hull, depths) & ~obj)
     # the object itself: empty, its colour the fill's (:func:`emptied`)
     filled = full.with_bricks(values)
     # the inpainted hole's colour is the mean: the 2D prior that paints it disagrees between views, and view

@@ -309,11 +309,11 @@ class FitConfig(Settings):
                                      low=0)
     fringe_width: float = setting(0.03, "the band beside the masks searched for the dark fringe, fraction of the "
                                         "image diagonal", above=0, high=1)
-    fringe_unseen: bool = setting(False, "no view sees the background through the dark fringe: the hull vertices "
-                                         "seen only there (the object's soft edge) are refilled with the hole instead "
-                                         "of kept, not only left out of L_bg (off by default: it removes more of a "
-                                         "box's outline, but the foreground's coverage then spills past the object; "
-                                         "reports/notes.md)")
+    fringe_unseen: bool = setting(True, "no view sees the background through the dark fringe: the hull vertices "
+                                        "seen only there (the object's soft edge, its dark outline on the floor) "
+                                        "are refilled with the hole instead of kept, not only left out of L_bg; "
+                                        "their density only where the fill's is higher (thinned, the surface "
+                                        "would move and the foreground spill past the object; reports/notes.md)")
     hull_color_fill: bool = setting(False, "with keep_seen, the hull vertices the fill inpaints take their colour "
                                            "from outside the hull alone, not from the vertices views see in it "
                                            "(those keep their own): beside the object's silhouette these hold the "

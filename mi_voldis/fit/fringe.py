@@ -7,9 +7,10 @@ pixel within ``MASK_EDGE_PX`` of a mask). Where it meets what lies behind it, a 
 may hold up to half of the object (masks are coverage > 0.5). The masked loss L_bg fits both into the
 background, which then keeps a dark outline where the object stood. These pixels join the effect
 masks: they leave L_bg and the 2D prior paints them, as it paints the object's shadow. With
-``fringe_unseen``, besides, no view counts as seeing the background through them
-(:func:`~mi_voldis.fit.background.never_seen`: the hull vertices seen only there, the object's soft edge,
-are refilled with the hole instead of kept).
+``fringe_unseen`` (the default), besides, no view counts as seeing the background through them
+(:func:`~mi_voldis.fit.background.never_seen`: the hull vertices seen only there, the object's soft edge
+and its outline on the floor, are refilled with the hole instead of kept, their density never thinned:
+:func:`~mi_voldis.fit.background.denser`).
 
 The rule, in each masked view: a pixel p outside the mask, within ``width`` pixels of it, is the
 object's when, in every colour channel c,
