@@ -4,13 +4,18 @@ by 5 pixels (on the 8-bit previews: near the bench's figure, not it).
 
     python error_sheet.py DATASET OUT.png REMOVAL_BEFORE REMOVAL_AFTER     # REMOVAL: .../removal/familyNN/guided
 """
+import os
 import sys
 
 import cv2
 import numpy as np
 from PIL import Image
 
+if len(sys.argv) < 4:
+    raise SystemExit(__doc__.strip().splitlines()[-1].strip())
 data, out, folders = sys.argv[1], sys.argv[2], sys.argv[3:]
+if os.path.lexists(out):  # a sheet of its own, never a file already there
+    raise SystemExit(f"error_sheet.py: {out} exists; give a new file")
 rows = []
 for v in (0, 8, 16, 24):
     truth = np.array(Image.open(f"{data}/backgrounds/view_{v:03d}.png").convert("RGB")) / 255.0
