@@ -23,7 +23,7 @@ from ..metrics import dilate
 from ..render import march
 from .fields import step_voxels
 from .hull import hull_behind_occluders, visual_hull
-from .visibility import hidden_depth, hidden_surface_side, in_view
+from .visibility import hidden_depth, hidden_surface_side, in_view, seen_elsewhere
 
 
 def hull_region(inputs, field, neighbours, depth=None):
@@ -105,6 +105,38 @@ def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
     return mi.Bool(out)
 
 
+def seen_through(inputs, field, candidates, depth):
+    """Bool per stored vertex of ``field``: among ``candidates`` (Bool per stored vertex; the hull vertices
+    some view sees unmasked), those on no training view's surface: wherever a view of ``depth`` (view ->
+    full-field median depth map) has one unmasked (outside its mask and, with ``fringe_unseen``, the
+    object's dark fringe, grown by a pixel as in :func:`never_seen`), its depth there is farther or nearer
+    than the vertex by more than ``seen_surface_tol`` of the distance. Every view sees through them: what
+    density the full field holds there is haze, which the data never asked of the background."""
+    ds, tol = inputs.ds, inputs.cfg.seen_surface_tol
+    pts_scene, real = vertex_positions(field)
+    pick = np.flatnonzero(np.array(candidates) & real)
+    views = list(depth)
+    shown = ds.masks if inputs.fringe is None or not inputs.cfg.fringe_unseen else ds.masks | inputs.fringe
+    on = seen_elsewhere(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
+                        [depth[v] for v in views], [dilate(shown[v], 1) for v in views], tol=tol)
+    out = np.zeros(len(pts_scene), bool)
+    out[pick[~on]] = True
+    return mi.Bool(out)
+
+
+def no_denser(field, reference, region):
+    """``field`` with its density in ``region`` (Bool per stored vertex) at most ``reference``'s (a field on
+    the same lattice), colour as it was: the background's refit of the vertices views see through
+    (:func:`seen_through`) may clear the full field's haze there, never add to it. Denser than the full
+    field, such a vertex would lower the transmittance to the surface behind it, the foreground (the
+    sample-wise max(w_full - w_bg, 0)) would take that surface's weight there, and its coverage spill past
+    the object."""
+    mine, theirs = field.bricks_data(), reference.bricks_data()
+    i = dr.arange(mi.UInt32, dr.width(mine))
+    density = dr.gather(mi.Bool, region, i // field.width) & (i % field.width == 0)
+    return field.with_bricks(dr.select(density, dr.minimum(mine, theirs), mine))
+
+
 def fringe_vertices(inputs, state, hull, depths):
     """Bool per stored vertex of the full field: the hull vertices (``hull``: Float per vertex) that
     training views see unmasked only through the object's dark fringe (``inputs.fringe``), unseen once
@@ -175,7 +207,8 @@ def start_harmonic(inputs, state, depths=None):
     sees. With ``keep_seen`` only the hull voxels no training view sees unmasked, or within ``keep_seen_gap``
     vertices of the object's, are inpainted; the others keep the full field's values (the fill's boundary; with
     ``hull_color_fill`` the density's alone, the colour filled from outside the hull: :func:`hull_fill`).
-    Returns the hull, the object's voxels and those inpainted hull voxels (:func:`background_regions`).
+    Returns the hull, the object's voxels, those inpainted hull voxels and among them the seen ones every
+    view sees through (:func:`background_regions`).
     ``depths``: the full field's median depth maps by view, read and filled
     (:func:`~mi_voldis.fit.lift.training_depths`)."""
     if inputs.cfg.hole_carve:  # room for the hidden surface where no training ray ended
@@ -186,7 +219,8 @@ def start_harmonic(inputs, state, depths=None):
     full = state.fields["full"]
     neighbours = neighbour_vertices(full)
     depths = {} if depths is None else depths  # rendered once for the regions and the fringe's vertices
-    hull, points, obj, refill, solid = background_regions(inputs, state, neighbours, with_solid=True, depths=depths)
+    hull, points, obj, refill, solid, through = background_regions(inputs, state, neighbours, with_solid=True,
+                                                                   depths=depths, with_through=True)
     region = dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull
     weights = fill_weights(inputs, full, points)
     data = full.bricks_data()
@@ -203,14 +237,14 @@ def start_harmonic(inputs, state, depths=None):
     if solid is not None:  # the hidden surface: opaque from the filled depth on (hole_shell)
         state.fields["bg"] = with_opacity(inputs, state, state.fields["bg"], solid & ~obj, SOLID_ALPHA)
     state.hull_points = points
-    return hull, obj, refill
+    return hull, obj, refill, through
 
 
 def voxel_of(field):
     return float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
 
 
-def background_regions(inputs, state, neighbours=None, with_solid=False, depths=None):
+def background_regions(inputs, state, neighbours=None, with_solid=False, depths=None, with_through=False):
     """The visual hull (Float per stored vertex), its vertices' positions, the object's own voxels
     (Bool) and the hull vertices no training view sees unmasked (Bool, :func:`never_seen`) with those
     within ``keep_seen_gap`` vertices of the object's voxels: the object's soft edge, which views see
@@ -224,7 +258,10 @@ def background_regions(inputs, state, neighbours=None, with_solid=False, depths=
     where the refit continues the background. With ``hole_carve`` the object's voxels also take in the
     unseen hull vertices in front of the surface the object hides or far behind it (:func:`hole_shell`),
     however faint; ``with_solid``: also (5th) the unseen vertices from that surface on, which the
-    background starts opaque (None without ``hole_carve``). ``depths``: see :func:`start_harmonic`."""
+    background starts opaque (None without ``hole_carve``). With ``keep_seen`` and ``seen_surface_tol``, the
+    refilled vertices take in the seen ones that every view sees through (:func:`seen_through`);
+    ``with_through``: also (last) those (Bool), which the refit leaves no denser than the full field
+    (:func:`no_denser`). ``depths``: see :func:`start_harmonic`."""
     from .lift import training_depths
     cfg, full = inputs.cfg, state.fields["full"]
     neighbours = neighbours or neighbour_vertices(full)
@@ -237,13 +274,18 @@ def background_regions(inputs, state, neighbours=None, with_solid=False, depths=
         candidates |= front
     unseen = never_seen(inputs, full, hull > 0, depth)
     obj, refill = unseen & candidates, unseen
-    if cfg.keep_seen:  # the object's soft edge is refilled too
+    through = dr.zeros(mi.Bool, full.vertices)
+    if cfg.keep_seen:  # the object's soft edge is refilled too, and the haze views see through
         refill = unseen | (dilate_vertices(obj, neighbours, cfg.keep_seen_gap) & (hull > 0))
+        if cfg.seen_surface_tol > 0:
+            through = seen_through(inputs, full, (hull > 0) & ~refill, depth)
+            refill |= through
     solid = None
     if cfg.hole_carve:  # unseen space before the hidden surface (the object's or empty) and far behind it
         carve, solid = hole_shell(inputs, full, unseen, depth)
         obj |= unseen & carve
-    return (hull, points, obj, refill, solid) if with_solid else (hull, points, obj, refill)
+    out = (hull, points, obj, refill) + ((solid,) if with_solid else ())
+    return out + (through,) if with_through else out
 
 
 def hole_shell(inputs, field, candidates, depth):

@@ -289,8 +289,9 @@ class FitConfig(Settings):
                                              "surface, they would show through it as haze while it is not opaque",
                                        above=0)
     keep_seen: bool = setting(True, "hull voxels some training view sees unmasked keep the full field's density "
-                                    "in bg (their colour is refitted; only the unseen voxels and those within "
-                                    "keep_seen_gap of the object's are filled and reshaped; bg_strategy "
+                                    "in bg (their colour is refitted; only the unseen voxels, those within "
+                                    "keep_seen_gap of the object's and those on no view's surface, "
+                                    "seen_surface_tol, are filled and reshaped; bg_strategy "
                                     "'harmonic', 'guided'): outside the object the two fields' densities agree, "
                                     "so the foreground layer w_fg = w_full - w_bg holds the object alone; the "
                                     "object's shadow stays in the background with that geometry")
@@ -329,6 +330,18 @@ class FitConfig(Settings):
                                     "voxels are filled even where a view sees them unmasked: the object's soft "
                                     "edge, which views see beside its silhouette, leaves with it (0: none)",
                                  low=0)
+    seen_surface_tol: float = setting(0.0, "with keep_seen, a hull vertex some view sees unmasked keeps the full "
+                                           "field's density only if it lies on such a view's surface (the full "
+                                           "field's median depth there within this fraction of its distance); "
+                                           "those every view sees through (the full field's haze about the "
+                                           "object, which the hull's fill would carry into the hole as a glassy "
+                                           "ghost) are filled and refitted with the hole, never denser than the "
+                                           "full field: denser, they would hide what views see behind them and "
+                                           "the foreground would take it (0: every seen vertex kept, the "
+                                           "default: 0.015 lifts the removal family's worst scenes but leaves a "
+                                           "sharper ghost of the statue, reports/notes.md; bg_strategy "
+                                           "'harmonic', 'guided')",
+                                     low=0, high=1)
 
     # ---- bookkeeping
     seed: int = setting(0, "random seed: ray batches and jitter", low=0)

@@ -62,6 +62,7 @@ from .background import (
     clear_empty_background_color,
     effect_cells,
     hull_region,
+    no_denser,
     start_cleared,
     start_harmonic,
 )
@@ -155,9 +156,9 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
         shaped = None  # where the density may change, if not wherever the colour may
         if harmonic:  # the object's own voxels stay empty
             if regions is None:
-                hull, _, obj, refill = background_regions(inputs, state, depths=depths)
+                hull, _, obj, refill, through = background_regions(inputs, state, depths=depths, with_through=True)
             else:
-                hull, obj, refill = regions
+                hull, obj, refill, through = regions
             free = dr.select(obj, 0.0, hull)
             if cfg.keep_seen:  # what some view sees keeps the full field's density
                 shaped = dr.select(refill, free, 0.0)
@@ -190,6 +191,8 @@ def fit(dataset, checkpoint, cfg, resume=False, progress=True, inpainter=None):
                  log=state.log, desc="bg refit", checkpoint=checkpoint_at("bg")(problem),
                  **checkpoints(cfg), progress=progress)
         problem.sync_states()
+        if harmonic and dr.count(through)[0] > 0:  # the haze views see through: cleared at most, never thickened
+            state.fields["bg"] = no_denser(state.fields["bg"], state.fields["full"], through)
         state.phase_times["bg"] = state.phase_times.get("bg", 0.0) + time.perf_counter() - t0
     if "bg" not in state.fields:  # no masks: nothing to disentangle, the background is the full scene
         full = state.fields["full"]
