@@ -1,7 +1,8 @@
 """#46: what the full field holds in and around the object's visual hull, by class and by place: outside the hull
 (by rings out from it), the kept hull vertices (some training view sees them unmasked), the refilled (unseen)
 ones and the object's voxels, binned by height above the floor (the world's up from the cameras) and by steps
-(vertex rings) in from the hull's outside. Opacity a
+(vertex rings) in from the hull's outside. On a capture whose hull runs out to a contracted space's far shell
+(the statue's) the height bands are meaningless: the object's top then lies at 1e12 world units. Opacity a
 voxel, colour sigmoid(C_0) (degree 0), and the count.
 
     python probe.py RUN [KEY=VALUE ...]   # RUN: a fit kept with --keep-checkpoints (reads the 2026-11-30b
