@@ -11,6 +11,8 @@ import numpy as np
 from PIL import Image
 
 src, dst, k = sys.argv[1], sys.argv[2], int(sys.argv[3])
+if os.path.lexists(dst):  # a copy of its own, never into a folder already there (the dataset itself)
+    raise SystemExit(f"dilate_ds.py: {dst} exists; give a new folder")
 os.makedirs(dst)
 for name in os.listdir(src):
     if name != "masks":
