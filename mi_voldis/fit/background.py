@@ -93,15 +93,23 @@ def never_seen(inputs, field, candidates, depth, edge=1, tol=0.05):
     ``edge`` pixels as a vertex is a point and a mask a set of pixel centres, and not behind something
     nearer): the strict visual hull, where an occluder in front of the object in some view does not make
     its cells count."""
+    return _none_unmasked(inputs, field, candidates, depth, edge,
+                          lambda points, cams, depths, masks: in_view(points, cams, depths, masks, tol=tol))
+
+
+def _none_unmasked(inputs, field, candidates, depth, edge, test):
+    """Bool per stored vertex of ``field``: the ``candidates`` for which ``test(world points, cameras, depth
+    maps, masks)`` (Bool per point) is False over the training views of ``depth``, each view's mask its
+    object's (and, with ``fringe_unseen``, the object's dark fringe) grown by ``edge`` pixels."""
     ds = inputs.ds
     pts_scene, real = vertex_positions(field)
     pick = np.flatnonzero(np.array(candidates) & real)
     views = list(depth)
     shown = ds.masks if inputs.fringe is None or not inputs.cfg.fringe_unseen else ds.masks | inputs.fringe
-    seen = in_view(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
-                   [depth[v] for v in views], [dilate(shown[v], edge) for v in views], tol=tol)
+    hit = test(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
+               [depth[v] for v in views], [dilate(shown[v], edge) for v in views])
     out = np.zeros(len(pts_scene), bool)
-    out[pick[~seen]] = True
+    out[pick[~hit]] = True
     return mi.Bool(out)
 
 
@@ -112,16 +120,9 @@ def seen_through(inputs, field, candidates, depth):
     object's dark fringe, grown by a pixel as in :func:`never_seen`), its depth there is farther or nearer
     than the vertex by more than ``seen_surface_tol`` of the distance. Every view sees through them: what
     density the full field holds there is haze, which the data never asked of the background."""
-    ds, tol = inputs.ds, inputs.cfg.seen_surface_tol
-    pts_scene, real = vertex_positions(field)
-    pick = np.flatnonzero(np.array(candidates) & real)
-    views = list(depth)
-    shown = ds.masks if inputs.fringe is None or not inputs.cfg.fringe_unseen else ds.masks | inputs.fringe
-    on = seen_elsewhere(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
-                        [depth[v] for v in views], [dilate(shown[v], 1) for v in views], tol=tol)
-    out = np.zeros(len(pts_scene), bool)
-    out[pick[~on]] = True
-    return mi.Bool(out)
+    tol = inputs.cfg.seen_surface_tol
+    return _none_unmasked(inputs, field, candidates, depth, 1,
+                          lambda points, cams, depths, masks: seen_elsewhere(points, cams, depths, masks, tol=tol))
 
 
 def no_denser(field, reference, region):
