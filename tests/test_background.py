@@ -118,6 +118,34 @@ def test_a_fill_along_the_horizontal_continues_a_floor_and_leaves_the_air_above_
     assert iso[above].min() > -3.0 and iso[inner & (y == 6)].max() > -4.5
 
 
+def test_a_ceiling_in_the_fill_solves_the_obstacle_problem_exactly_and_changes_nothing_when_loose():
+    """The fill along x alone (weights 0 on y and z: every x line its own 1D problem) of the vertices
+    1..14 of each line, the ends at raw density 1. Without a ceiling the line is 1 throughout; with the
+    density capped at -2 on the middle vertex (x = 7: a veil views see through), the 1D obstacle problem's
+    solution is the two straight lines from the ends down to -2 there, and the colour channel, under no
+    ceiling, stays 1. A ceiling above every value gives the plain fill bit for bit."""
+    from mi_voldis.field_state import neighbour_vertices
+    from mi_voldis.fit.background import density_ceiling
+    from mi_voldis.fit.background import harmonic_fill as fill3d
+    field = new_field(np.zeros(3), np.ones(3), 16, 0, 1.0, 1.0, 4)
+    pts, real = vertex_positions(field)
+    i = np.rint(pts[:, 0] * 15).astype(int)
+    values = from_numpy(mi.Float, np.ones(field.vertices * field.width, np.float32))
+    region = from_numpy(mi.Float, ((i >= 1) & (i <= 14) & real).astype(np.float32))
+    along_x, nb = [1.0, 1.0, 0.0, 0.0, 0.0, 0.0], neighbour_vertices(field)
+    veil = from_numpy(mi.Bool, (i == 7) & real)
+    capped = dr.select(dr.arange(mi.UInt32, dr.width(values)) % field.width == 0, values - 3.0, values)
+    out = np.array(fill3d(values, field.width, region, nb, iterations=3000, weights=along_x,
+                          ceiling=density_ceiling(capped, field.width, veil))).reshape(-1, field.width)
+    obstacle = np.where(i <= 7, 1.0 - 3.0 * i / 7, -2.0 + 3.0 * (i - 7) / 8)
+    np.testing.assert_allclose(out[real, 0], obstacle[real], atol=1e-4)
+    np.testing.assert_allclose(out[real, 1:], 1.0, atol=1e-4)
+    plain = fill3d(values, field.width, region, nb, weights=along_x)
+    loose = fill3d(values, field.width, region, nb, weights=along_x,
+                   ceiling=density_ceiling(values + 1.0, field.width, veil))
+    np.testing.assert_array_equal(np.array(loose), np.array(plain))
+
+
 def test_the_filled_colour_comes_from_around_the_hull_not_from_the_vertices_views_see_in_it():
     """hull_fill: a hull (a box of vertices) in a field of one colour c and density s, and in it a slab of
     vertices views see (kept: their own density, and the object's tint as colour). The density fill takes
@@ -951,14 +979,15 @@ def test_what_some_view_sees_keeps_the_full_fields_density_so_the_foreground_is_
     assert spill.mean() > 0.05 and (spill > 0.1).mean() > 0.1
 
 
-def test_the_haze_views_see_through_leaves_the_background_and_never_thickens(tmp_path):
+def test_the_haze_views_see_through_leaves_the_background_and_never_thickens(tmp_path, monkeypatch):
     """``seen_surface_tol``: a veil of haze hung in the sphere's hull (raw density -1 and -4 at alternate
     vertices, 4.5 voxels and more from the sphere and 2.5 above the floor: beyond ``keep_seen_gap`` and the
     object's own voxels), where training views see it unmasked and look through it to the floor, is kept
     vertex for vertex when every seen vertex keeps the full field's density (tolerance 0, the default). At
     0.015 those vertices lie on no view's surface: the refit takes them with the hole, the veil thinned to under
-    half its density on the whole, and no vertex of it denser than the full field holds it (the fill evens
-    the alternation out; without :func:`~mi_voldis.fit.background.no_denser` the -4 vertices end denser)."""
+    half its density on the whole, and no vertex of it denser than the full field holds it. The fill alone
+    already leaves it so (the refit's clamp, :func:`~mi_voldis.fit.background.no_denser`, switched off, no
+    refit step): a plain harmonic fill would even the alternation out, the -4 vertices denser than before."""
     from mi_voldis.field_state import density_of
     from mi_voldis.fit.background import background_regions
     voxel, centre, radius = 2.0 / 39, np.array([0.0, FLOOR_Y + 0.3, 0.0]), 0.3
@@ -986,6 +1015,30 @@ def test_the_haze_views_see_through_leaves_the_background_and_never_thickens(tmp
     bg, fu = results[0.015]
     assert np.all(bg <= fu)
     assert np.logaddexp(0, bg).mean() < 0.5 * np.logaddexp(0, fu).mean()  # softplus: the density
+    monkeypatch.setattr("mi_voldis.fit.train.no_denser", lambda field, reference, region: field)
+    _, full, _, state = guided_removal(tmp_path / "start", edit=veiled, seen_surface_tol=0.015, steps_bg=0)
+    bg, fu = density_of(state.fields["bg"])[veils["kept"]], density_of(full)[veils["kept"]]
+    assert np.all(bg <= fu) and np.any(bg < fu)
+
+
+def test_no_denser_caps_the_density_alone_and_only_in_its_region():
+    """:func:`~mi_voldis.fit.background.no_denser`: a field and a reference on one lattice; in the region
+    the density is the smaller of the two, everywhere else and in every colour channel the field's own."""
+    from mi_voldis.field_state import density_of
+    from mi_voldis.fit.background import no_denser
+    field = new_field(np.zeros(3), np.ones(3), 8, 0, -3.0, 1.0, 4)
+    rng = np.random.default_rng(1)
+    mine = rng.normal(0, 2, dr.width(field.data)).astype(np.float32)
+    theirs = rng.normal(0, 2, dr.width(field.data)).astype(np.float32)
+    a, b = field.with_data(mi.Float(mine)), field.with_data(mi.Float(theirs))
+    region = rng.random(field.vertices) < 0.5
+    out = no_denser(a, b, mi.Bool(region))
+    da, db, do = density_of(a), density_of(b), density_of(out)
+    np.testing.assert_array_equal(do[region], np.minimum(da, db)[region])
+    np.testing.assert_array_equal(do[~region], da[~region])
+    assert np.any(db[region] < da[region])
+    colour = np.array(out.bricks_data()).reshape(-1, field.width)[:, 1:]
+    np.testing.assert_array_equal(colour, np.array(a.bricks_data()).reshape(-1, field.width)[:, 1:])
 
 
 def test_the_objects_soft_edge_leaves_with_it_though_views_see_it_unmasked(tmp_path):

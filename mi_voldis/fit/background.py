@@ -125,6 +125,18 @@ def seen_through(inputs, field, candidates, depth):
                           lambda points, cams, depths, masks: seen_elsewhere(points, cams, depths, masks, tol=tol))
 
 
+def density_ceiling(values, width, region):
+    """Per packed value of a field's ``values`` (``width`` channels a vertex), the most the hull's fill may give
+    it: the density the field holds at the vertices of ``region`` (Bool per stored vertex; the ones views see
+    through, :func:`seen_through`), unbounded elsewhere. So the fill clears the full field's haze there at
+    most, as the refit does (:func:`no_denser`), and the unseen vertices behind such a veil are filled from it,
+    not from denser surfaces farther out: on a one-sided rig whose hull runs out to the far shell those are
+    the far surfaces at the hull's end, which a fill carried through the veil would paint into the hole."""
+    i = dr.arange(mi.UInt32, dr.width(values))
+    capped = dr.gather(mi.Bool, region, i // width) & (i % width == 0)
+    return dr.select(capped, values, dr.inf)
+
+
 def no_denser(field, reference, region):
     """``field`` with its density in ``region`` (Bool per stored vertex) at most ``reference``'s (a field on
     the same lattice), colour as it was: the background's refit of the vertices views see through
@@ -209,7 +221,8 @@ def start_harmonic(inputs, state, depths=None):
     vertices of the object's, are inpainted; the others keep the full field's values (the fill's boundary; with
     ``hull_color_fill`` the density's alone, the colour filled from outside the hull: :func:`hull_fill`).
     Returns the hull, the object's voxels, those inpainted hull voxels and among them the seen ones every
-    view sees through (:func:`background_regions`).
+    view sees through (:func:`background_regions`), which the fill leaves no denser than the full field
+    (:func:`density_ceiling`).
     ``depths``: the full field's median depth maps by view, read and filled
     (:func:`~mi_voldis.fit.lift.training_depths`)."""
     if inputs.cfg.hole_carve:  # room for the hidden surface where no training ray ended
@@ -225,8 +238,9 @@ def start_harmonic(inputs, state, depths=None):
     region = dr.select(refill, hull, 0.0) if inputs.cfg.keep_seen else hull
     weights = fill_weights(inputs, full, points)
     data = full.bricks_data()
-    values = (hull_fill(data, full.width, region, hull, neighbours, weights) if inputs.cfg.hull_color_fill
-              else harmonic_fill(data, full.width, region, neighbours, weights=weights))
+    ceiling = density_ceiling(data, full.width, through) if dr.count(through)[0] > 0 else None
+    values = (hull_fill(data, full.width, region, hull, neighbours, weights, ceiling) if inputs.cfg.hull_color_fill
+              else harmonic_fill(data, full.width, region, neighbours, weights=weights, ceiling=ceiling))
     if inputs.fringe is not None and inputs.cfg.fringe_unseen:  # what views see only through the fringe
         values = denser(data, values, full.width, fringe_vertices(inputs, state, hull, depths) & ~obj)
     # the object itself: empty, its colour the fill's (:func:`emptied`)
@@ -436,28 +450,31 @@ def fill_weights(inputs, field, points):
     return [float(1.0 - (1.0 - v) * u[axis] ** 2) for axis in range(3) for _ in range(2)]
 
 
-def hull_fill(values, width, region, hull, neighbours, weights=None):
+def hull_fill(values, width, region, hull, neighbours, weights=None, ceiling=None):
     """Packed ``values`` with those of ``region`` (Float per stored vertex, 1 = fill) replaced by their
     harmonic fill (:func:`harmonic_fill`): the density's from every value around ``region``; the colour's
     (the other channels) from the colour around ``hull`` (Float per stored vertex, ``region`` inside it)
     alone, the vertices of the hull outside ``region`` keeping their own. Those are the cells views see
     unmasked: beside the object's silhouette they hold its colour (its soft edge, mask edges that mix it
     in), and a fill from them would paint the object's tint and outline into the hole, a ghost the
-    refit's 2D prior does not undo."""
-    density = harmonic_fill(values, width, region, neighbours, channels=(0, 1), weights=weights)
+    refit's 2D prior does not undo. ``ceiling``: as :func:`harmonic_fill`'s."""
+    density = harmonic_fill(values, width, region, neighbours, channels=(0, 1), weights=weights, ceiling=ceiling)
     colour = harmonic_fill(values, width, hull, neighbours, channels=(1, width), weights=weights)
     channel = dr.arange(mi.UInt32, dr.width(values)) % width
     return dr.select(dr.repeat(region > 0, width) & (channel > 0), colour, density)
 
 
-def harmonic_fill(values, width, region, neighbours, iterations=300, channels=None, weights=None):
+def harmonic_fill(values, width, region, neighbours, iterations=300, channels=None, weights=None, ceiling=None):
     """Packed ``values`` inside ``region`` (Float per stored vertex, 1 = fill) replaced by the harmonic
     extension of the values around them (Jacobi iterations of the 6-neighbour Laplace equation, every
     channel), a smooth volumetric inpainting: surfaces crossing the region continue through it. Only
     the region's values are iterated (compactly); the rest stay as they are. ``channels``: (first,
     end) of the channels to fill (default all); ``weights``: one per neighbour direction (default
     equal), the diagonal of an anisotropic conductivity: div(K grad f) = 0, each Jacobi step the
-    weighted mean sum_d k_d f_d / sum_d k_d."""
+    weighted mean sum_d k_d f_d / sum_d k_d. ``ceiling`` (packed, as ``values``): the fill at most it, the
+    discrete obstacle problem (u harmonic where u < ceiling, u <= ceiling everywhere), solved by projected
+    Jacobi: each step's mean clipped to the ceiling, a monotone iteration (the weights are positive), so it
+    tends to that problem's solution as the plain one tends to the harmonic fill."""
     n = dr.width(values)
     i = dr.arange(mi.UInt32, n)
     inside = dr.gather(mi.Float, region, i // width) > 0
@@ -475,13 +492,16 @@ def harmonic_fill(values, width, region, neighbours, iterations=300, channels=No
         j = dr.gather(mi.UInt32, nb, vertex) * width + channel
         k = dr.gather(mi.UInt32, compact, j)
         dirs.append((k < m, k, dr.gather(mi.Float, values, j)))  # (free?, place, fixed value)
-    inner = dr.zeros(mi.Float, m)
-    dr.eval(dirs, inner)
+    top = None if ceiling is None else dr.gather(mi.Float, ceiling, fill)
+    inner = dr.zeros(mi.Float, m) if top is None else dr.minimum(0.0, top)
+    dr.eval(dirs, inner, top)
     weights = [1.0] * 6 if weights is None else weights
     total = sum(weights)
     for _ in range(iterations):
         inner = sum(w * dr.select(free, dr.gather(mi.Float, inner, k, free), fixed)
                     for w, (free, k, fixed) in zip(weights, dirs) if w > 0) / total
+        if top is not None:
+            inner = dr.minimum(inner, top)
         dr.eval(inner)
     out = dr.copy(values)  # the caller's values stay unchanged
     dr.scatter(out, inner, fill)

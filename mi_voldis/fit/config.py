@@ -336,10 +336,11 @@ class FitConfig(Settings):
                                            "those every view sees through (the full field's haze about the "
                                            "object, which the hull's fill would carry into the hole as a glassy "
                                            "ghost) are filled and refitted with the hole, never denser than the "
-                                           "full field: denser, they would hide what views see behind them and "
-                                           "the foreground would take it (0: every seen vertex kept, the "
-                                           "default: 0.015 lifts the removal family's worst scenes but leaves a "
-                                           "sharper ghost of the statue, reports/notes.md; bg_strategy "
+                                           "full field (in the fill too, so the unseen hull behind them is filled "
+                                           "from them, not from the far surfaces at the hull's end): denser, they "
+                                           "would hide what views see behind them and the foreground would take "
+                                           "it (0: every seen vertex kept, the default; 0.015 measured on the "
+                                           "removal family and the captures in reports/notes.md; bg_strategy "
                                            "'harmonic', 'guided')",
                                      low=0, high=1)
 
