@@ -80,12 +80,14 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
     assert not finished(str(old), dataset, TINY_FIT + ["host_ms=5"])
 
 
-def family_results(margins):
+def family_results(margins, outside=None):
     """Removal-family results (mi_voldis.bench.family) with the default row's in-mask PSNR 20 + margin
-    over Telea (20) and Navier-Stokes (19) per scene: {scene: (half, margin)}."""
+    over Telea (20) and Navier-Stokes (19) per scene: {scene: (half, margin)}; outside the mask 30 dB, or
+    20 + ``outside[scene]``."""
     scenes = {}
     for scene, (half, margin) in margins.items():
-        methods = {"volume": {"psnr_mask": 20.0 + margin, "psnr_unseen": 18.0, "consistency_psnr": 30.0,
+        methods = {"volume": {"psnr_mask": 20.0 + margin, "psnr_outside": 20.0 + (outside or {}).get(scene, 10.0),
+                              "psnr_unseen": 18.0, "consistency_psnr": 30.0,
                               "fg_coverage_iou": 0.95, "bg_haze_mask": 0.02, "bg_haze_outside": 0.03,
                               "residue": 0.05},
                    "telea": {"psnr_mask": 20.0, "consistency_psnr": 25.0},
@@ -98,14 +100,17 @@ def family_results(margins):
 def test_the_family_report_leads_with_the_check_halfs_worst_scene_not_the_tunings():
     from mi_voldis.bench.family import lead, summary
     results = family_results({"family00": ("tuning", -3.0), "family10": ("check", 2.5), "family11": ("check", 1.5),
-                              "family12": ("check", 4.0)})
+                              "family12": ("check", 4.0)}, outside={"family11": 1.9})
     check = summary(results, "guided", "check")
     assert check["worst"] == ("family11", 1.5) and check["n"] == 3
+    assert check["bound"] == ["family11"]  # its background outside the mask is 1.9 dB over Telea inside it
     assert check["margins"] == [1.5, 2.5, 4.0]
     assert sorted(check["met"]) == ["family10", "family12"]  # +2 dB, +3.5 dB consistency, IoU 0.95
     assert summary(results, "guided", "tuning")["worst"] == ("family00", -3.0)
     text = "\n".join(lead(results))
     assert "check half: worst family11 +1.50 dB" in text and "2 of 3 scenes meet every target" in text
+    assert "under +2 dB even outside the mask: family11." in text
+    assert "| family11 | arc | guided | 21.50 | 18.00 | 20.00 | +1.50 | +1.90 | 30.00 |" in text
     assert text.index("### Check half") < text.index("### Tuning half")
 
 
