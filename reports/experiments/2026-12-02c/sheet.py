@@ -17,7 +17,7 @@ data, out, folders = sys.argv[1], sys.argv[2], sys.argv[3:]
 if os.path.lexists(out):  # a sheet of its own, never a file already there
     raise SystemExit(f"sheet.py: {out} exists; give a new file")
 rows = []
-for v in (0, 8, 16, 24):
+for v in (v for v in (0, 8, 16, 24) if os.path.isfile(f"{data}/backgrounds/view_{v:03d}.png")):
     truth = np.array(Image.open(f"{data}/backgrounds/view_{v:03d}.png").convert("RGB"))
     img = np.array(Image.open(f"{data}/images/view_{v:03d}.png").convert("RGB"))
     mask = np.array(Image.open(f"{data}/masks/view_{v:03d}.png").convert("L")) > 127
