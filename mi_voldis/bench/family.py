@@ -21,6 +21,9 @@ from .run import ground_truth_fits, new_results, save_results, strategy_rows
 # the check half the default alone
 STRATEGIES = {"tuning": ["guided", "guided+hull_color_fill", "guided+hole_carve"], "check": ["guided"]}
 ROWS = list(dict.fromkeys(STRATEGIES["tuning"] + STRATEGIES["check"]))  # every row, in report order
+# #46's targets on every check scene: margin over the better 2D fill in the mask, consistency margin over the
+# best 2D method's (dB), foreground coverage IoU
+TARGET_MARGIN, TARGET_CONSISTENCY, TARGET_IOU = 2.0, 3.0, 0.9
 
 
 def scenes(chosen=None):
@@ -69,9 +72,10 @@ def summary(results, strategy, half):
     if not rows:
         return None
     worst = min(rows, key=lambda s: rows[s]["margin"])
-    met = [s for s, r in rows.items() if r["margin"] >= 2 and r["consistency_margin"] >= 3
-           and (r["coverage_iou"] or 0) >= 0.9]
-    bound = sorted(s for s, r in rows.items() if r["outside_margin"] is not None and r["outside_margin"] < 2)
+    met = [s for s, r in rows.items() if r["margin"] >= TARGET_MARGIN and r["consistency_margin"] >= TARGET_CONSISTENCY
+           and (r["coverage_iou"] or 0) >= TARGET_IOU]
+    bound = sorted(s for s, r in rows.items()
+                   if r["outside_margin"] is not None and r["outside_margin"] < TARGET_MARGIN)
     return {"worst": (worst, rows[worst]["margin"]), "margins": sorted(r["margin"] for r in rows.values()),
             "met": met, "bound": bound, "n": len(rows)}
 
@@ -86,12 +90,8 @@ def work_minutes(results):
     return total / 60.0
 
 
-def _f(x, digits=2):
-    return "-" if x is None or x != x else f"{x:.{digits}f}"
-
-
-def _signed(x):
-    return "-" if x is None or x != x else f"{x:+.2f}"
+def _f(x, digits=2, sign=False):
+    return "-" if x is None or x != x else f"{x:{'+' if sign else ''}.{digits}f}"
 
 
 def lead(results, sheets=None):
@@ -142,7 +142,7 @@ def lead(results, sheets=None):
                     continue
                 md.append(f"| {scene} | {entry['kind']} | {strategy} | {_f(r['psnr_mask'])} | "
                           f"{_f(r['psnr_unseen'])} | "
-                          f"{_f(r['classic'])} | {r['margin']:+.2f} | {_signed(r['outside_margin'])} | "
+                          f"{_f(r['classic'])} | {r['margin']:+.2f} | {_f(r['outside_margin'], sign=True)} | "
                           f"{_f(r['consistency'])} | "
                           f"{_f(r['best_2d_consistency'])} | {r['consistency_margin']:+.2f} | "
                           f"{_f(r['coverage_iou'])} | "

@@ -30,8 +30,11 @@ def meets(r):
 
 pairs = {}
 for arg in sys.argv[1:]:
-    old, new = arg.split(":")
-    for scene in sorted(os.listdir(new)) if os.path.isdir(new) else []:
+    old, new = arg.split(":", 1)
+    for folder in (old, new):
+        if not os.path.isdir(folder):
+            raise SystemExit(f"compare.py: {folder}: no such removal folder")
+    for scene in sorted(os.listdir(new)):
         if os.path.isfile(os.path.join(old, scene, "guided", "metrics.json")) and \
                 os.path.isfile(os.path.join(new, scene, "guided", "metrics.json")):
             pairs[scene] = (row(old, scene), row(new, scene))

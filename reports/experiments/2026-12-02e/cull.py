@@ -18,9 +18,15 @@ from PIL import Image  # noqa: E402
 from mi_voldis.bricks import EMPTY_DENSITY, Layout  # noqa: E402
 from mi_voldis.cameras import DevicePoints  # noqa: E402
 
+if len(sys.argv) < 4 or not all(k.isdigit() for k in sys.argv[3:]):
+    raise SystemExit(__doc__.strip().splitlines()[-1].strip())
 run, out, ks = sys.argv[1], sys.argv[2], [int(k) for k in sys.argv[3:]]
+if not os.path.isfile(os.path.join(run, "full_grid.npz")):
+    raise SystemExit(f"cull.py: {run}: not a run folder (no full_grid.npz)")
 if os.path.lexists(out):
-    raise SystemExit(f"cull.py: {out} exists")
+    raise SystemExit(f"cull.py: {out} exists; give a new folder")
+if os.path.realpath(out).startswith(os.path.realpath(run) + os.sep):
+    raise SystemExit(f"cull.py: {out} lies inside the run {run}; give a folder outside it")
 os.makedirs(out)
 r = mi_voldis.load_run(run)
 ds = r.dataset

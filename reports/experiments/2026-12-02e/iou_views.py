@@ -4,14 +4,18 @@ field's held-out PSNR in the same view (read from a bench report's family.json; 
     python iou_views.py reports/family.json
 """
 import json
+import os
 import sys
 
 import numpy as np
 
 if len(sys.argv) != 2:
     raise SystemExit(__doc__.strip().splitlines()[-1].strip())
-with open(sys.argv[1]) as f:
-    scenes = json.load(f)["scenes"]
+try:
+    with open(sys.argv[1]) as f:
+        scenes = json.load(f)["scenes"]
+except (OSError, ValueError, KeyError) as e:
+    raise SystemExit(f"{os.path.basename(__file__)}: {sys.argv[1]}: not a family report ({type(e).__name__}: {e})")
 low, high = [], []
 for name, e in sorted(scenes.items()):
     views = e["fit"]["metrics"]["per_view"]
