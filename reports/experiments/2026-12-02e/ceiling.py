@@ -4,17 +4,9 @@ Telea / Navier-Stokes inside the mask, + 2 dB), from a bench report's family.jso
 
     python ceiling.py reports/family.json
 """
-import json
-import os
-import sys
+from family_report import scenes_from_argv
 
-if len(sys.argv) != 2:
-    raise SystemExit(__doc__.strip().splitlines()[-1].strip())
-try:
-    with open(sys.argv[1]) as f:
-        scenes = json.load(f)["scenes"]
-except (OSError, ValueError, KeyError) as e:
-    raise SystemExit(f"{os.path.basename(__file__)}: {sys.argv[1]}: not a family report ({type(e).__name__}: {e})")
+scenes = scenes_from_argv(__doc__, __file__)
 print("scene     half   rig       in mask  outside  Telea/NS  target  margin  outside-target")
 for name, e in sorted(scenes.items()):
     m = e["strategies"]["guided"]["methods"]

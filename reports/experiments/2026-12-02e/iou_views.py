@@ -3,19 +3,10 @@ field's held-out PSNR in the same view (read from a bench report's family.json; 
 
     python iou_views.py reports/family.json
 """
-import json
-import os
-import sys
-
 import numpy as np
+from family_report import scenes_from_argv
 
-if len(sys.argv) != 2:
-    raise SystemExit(__doc__.strip().splitlines()[-1].strip())
-try:
-    with open(sys.argv[1]) as f:
-        scenes = json.load(f)["scenes"]
-except (OSError, ValueError, KeyError) as e:
-    raise SystemExit(f"{os.path.basename(__file__)}: {sys.argv[1]}: not a family report ({type(e).__name__}: {e})")
+scenes = scenes_from_argv(__doc__, __file__)
 low, high = [], []
 for name, e in sorted(scenes.items()):
     views = e["fit"]["metrics"]["per_view"]
