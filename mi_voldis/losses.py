@@ -64,3 +64,25 @@ def distortion_loss(per_ray, mask, object_gain=1.0):
     its rays should hold one peak: haze the full field leaves in front of it would otherwise stay in the
     background field and go missing from the foreground (w_fg = w_full - w_bg)."""
     return dr.mean((1.0 + (object_gain - 1.0) * mask) * per_ray)
+
+
+def depth_smoothness_loss(depth, alpha, color, pairs, edge=10.0):
+    """Edge-aware depth smoothness on neighbouring rays: RegNeRF's depth smoothness (Niemeyer et al. 2022, on
+    patches of unseen views there), here on tiles of the training photos' own pixels, weighted down
+    across the photo's colour edges, as self-supervised monocular depth does:
+
+        L = mean_(a,b) A_a A_b exp(-edge |c_a - c_b|_1 / 3) ((D_a - D_b) / (D_a + D_b))^2
+
+    over the ray pairs ``pairs`` (UInt32 a, UInt32 b: adjacent pixels, :func:`mi_voldis.raybank.tile_pairs`),
+    ``depth`` D the expected depth per ray (world units), ``alpha`` A its opacity (clamped to [0, 1]: a
+    ray that ends nowhere has no depth to smooth) and ``color`` c the photo's; only D carries gradients.
+    The step is relative, so a floor receding from the camera costs little per pixel while a sheet of fog
+    floating before the one camera that sees that floor pays at its border, unless the photo shows an
+    edge there."""
+    a, b = pairs
+    da, db = dr.gather(mi.Float, depth, a), dr.gather(mi.Float, depth, b)
+    color, opacity = dr.detach(color), dr.clip(dr.detach(alpha), 0.0, 1.0)
+    step = dr.abs(dr.gather(mi.Color3f, color, a) - dr.gather(mi.Color3f, color, b))
+    weight = (dr.gather(mi.Float, opacity, a) * dr.gather(mi.Float, opacity, b)
+              * dr.exp(-edge * (step.x + step.y + step.z) / 3.0))
+    return dr.mean(weight * dr.square((da - db) / dr.maximum(da + db, 1e-6)))

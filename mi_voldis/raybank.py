@@ -107,3 +107,12 @@ def tile_pixels(rng, anchors, tile, height, width):
     y = np.minimum(y0[:, None] + dy, height - 1)
     x = np.minimum(x0[:, None] + dx, width - 1)
     return (view[:, None] * (height * width) + y * width + x).ravel()
+
+
+def tile_pairs(tiles, tile):
+    """(n, 2) uint32: the ray indices of every horizontally and vertically adjacent pixel pair in a batch
+    of ``tiles`` tiles of ``tile`` x ``tile`` rays, row-major per tile (:func:`tile_pixels`' order)."""
+    y, x = np.divmod(np.arange(tile * tile), tile)
+    right, down = np.flatnonzero(x + 1 < tile), np.flatnonzero(y + 1 < tile)
+    pairs = np.concatenate([np.stack([right, right + 1], 1), np.stack([down, down + tile], 1)])
+    return (np.arange(tiles)[:, None, None] * tile * tile + pairs[None]).reshape(-1, 2).astype(np.uint32)

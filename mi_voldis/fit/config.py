@@ -219,6 +219,19 @@ class FitConfig(Settings):
                                     "the camera, r this fraction of the rig's extent (nerfstudio's unit: 1 is "
                                     "its scaling; 0: off)", low=0)
 
+    depth_smooth: float = setting(0.0, "weight of an edge-aware depth smoothness on tiles of the full field's "
+                                       "training rays (losses.depth_smoothness_loss): a patch of floor that few "
+                                       "views see ends at the depth of the floor around it, not on a sheet of fog "
+                                       "in front of the one camera that sees it (after RegNeRF's depth "
+                                       "smoothness, on the photos' own pixels; 0: off, the default: at 10 it "
+                                       "clears that sheet on a removal-family orbit but costs other rigs 2-5 dB "
+                                       "held out, reports/notes.md)", low=0)
+    depth_smooth_rays: float = setting(0.25, "rays of that smoothness per step, fraction of batch_rays, in "
+                                             "depth_smooth_tile x depth_smooth_tile tiles", above=0, high=1)
+    depth_smooth_tile: int = setting(4, "edge of the smoothness's pixel tiles", low=2)
+    depth_smooth_edge: float = setting(10.0, "gamma of the smoothness's edge weight exp(-gamma |c_a - c_b|_1 / 3): "
+                                             "across a colour edge of the photo depth may jump", low=0)
+
     # ---- modelling only what the scene needs
     brick: int = setting(8, "vertices along a brick's edge (sparse storage unit)", choices=(4, 8, 16))
     carve_weight: float = setting(1e-2, "at each resolution step bricks are kept where some training ray gives a "

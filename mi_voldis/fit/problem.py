@@ -10,8 +10,9 @@ from .. import exposure
 from ..data.scene_box import rig_extent
 from ..device import from_numpy
 from ..field_state import MEAN_CHANNELS, neighbour_vertices
-from ..losses import background_loss, distortion_loss, full_loss
+from ..losses import background_loss, depth_smoothness_loss, distortion_loss, full_loss
 from ..optim.parameters import PackedParameters
+from ..raybank import tile_pairs
 from ..regularizers import add_tv_gradient, sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
 from .fields import fit_integrator, memory_bound, occupancy_resolution, occupancy_sigma, refine
@@ -224,6 +225,15 @@ class FieldFit:
             err = background_loss(photo(out["bg"], behind, view), color, mask)
             loss += err
             stats["psnr_bg"] = psnr_of(err)
+        if "full" in self.layers and cfg.depth_smooth > 0:  # depth smoothness on tiles of training rays
+            tile = cfg.depth_smooth_tile
+            tiles = max(1, int(cfg.depth_smooth_rays * n) // (tile * tile))
+            o, d, target, _, _ = self.bank.batch(rng, tiles * tile * tile, self.pool, tile)
+            u = from_numpy(mi.Float, rng.random(tiles * tile * tile, np.float32))
+            _, alpha, depth = render_rays(self.integrator, o, d, u, ("full",))["full"]
+            pairs = tile_pairs(tiles, tile)
+            pairs = mi.UInt32(pairs[:, 0]), mi.UInt32(pairs[:, 1])
+            loss += cfg.depth_smooth * depth_smoothness_loss(depth, alpha, target, pairs, cfg.depth_smooth_edge)
         if self.prior is not None and cfg.prior_weight > 0:  # L_prior on masked rays (mi_voldis.fit.guide)
             bank, pool = self.prior
             m = max(1, int(cfg.prior_rays * n))
