@@ -17,8 +17,10 @@ import mi_voldis  # noqa: E402, I001
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 from PIL import Image  # noqa: E402
-from mi_voldis.bricks import Layout  # noqa: E402
 from mi_voldis.cameras import DevicePoints, device_image  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from grid_probe import check_paths, grid_vertices  # noqa: E402
 
 if len(sys.argv) != 5:
     raise SystemExit(__doc__.strip().splitlines()[-1].strip())
@@ -27,22 +29,14 @@ try:
     view, reach = int(sys.argv[2]), float(sys.argv[3])
 except ValueError:
     raise SystemExit(f"fog_views.py: VIEW {sys.argv[2]!r}, DIST {sys.argv[3]!r}: a view index and a number") from None
-if not os.path.isfile(os.path.join(run, "full_grid.npz")):
-    raise SystemExit(f"fog_views.py: {run}: not a run folder (no full_grid.npz)")
-if os.path.lexists(out):
-    raise SystemExit(f"fog_views.py: {out} exists; give a new folder")
+check_paths("fog_views.py", run, out)
 r = mi_voldis.load_run(run)
 ds = r.dataset
 if view not in set(int(v) for v in ds.test):
     raise SystemExit(f"fog_views.py: view {view} is not one of the run's held-out views {list(map(int, ds.test))}")
 os.makedirs(out)
-z = dict(np.load(os.path.join(run, "full_grid.npz")))
-lay = Layout(tuple(z["vertices"]), int(z["brick"]), z["table"])
-coords, inside = lay.vertex_coords()
-if len(coords) == len(z["data"]) + lay.vertices_per_brick:  # the file leaves out the empty slot
-    coords, inside = coords[lay.vertices_per_brick:], inside[lay.vertices_per_brick:]
-lo, hi = z["bbox"]
-at = DevicePoints(np.where(inside[:, None], lo + coords / (np.array(lay.shape) - 1) * (hi - lo), 0.0))
+z, inside, pts = grid_vertices(run)
+at = DevicePoints(pts)
 _, framed = at.pixel_of(ds.cameras[view])
 fog = inside & framed.numpy() & (at.distance(ds.cameras[view]).numpy() < reach) & (z["data"][:, 0] > -2)
 print(f"{run}: {fog.sum()} dense vertices within {reach} of view {view}'s camera, in its frame")
