@@ -74,7 +74,10 @@ def depth_smoothness_loss(depth, alpha, color, pairs, edge=10.0):
         L = mean_(a,b) A_a A_b exp(-edge |c_a - c_b|_1 / 3) ((D_a - D_b) / (D_a + D_b))^2
 
     over the ray pairs ``pairs`` (UInt32 a, UInt32 b: adjacent pixels, :func:`mi_voldis.raybank.tile_pairs`),
-    ``depth`` D the expected depth per ray (world units), ``alpha`` A its opacity (clamped to [0, 1]: a
+    ``depth`` D the expected depth per ray (the fit passes it through
+    :meth:`mi_voldis.space.SceneSpace.scene_depth`: world units, or scene units in a contracted space,
+    where a far wall's weakly determined depth of 10 or 30 units becomes nearly one value instead of a
+    noise that a sheet near the camera would smooth away), ``alpha`` A its opacity (clamped to [0, 1]: a
     ray that ends nowhere has no depth to smooth) and ``color`` c the photo's; only D carries gradients.
     The step is relative, so a floor receding from the camera costs little per pixel while a sheet of fog
     floating before the one camera that sees that floor pays at its border, unless the photo shows an

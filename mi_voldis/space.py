@@ -142,6 +142,16 @@ class SceneSpace:
         pc = apply_point(self.from_world_m, p)
         return mi.Point3f(self.scale[0] * pc.x / pc.z, self.scale[1] * pc.y / pc.z, 1.0 - 2.0 * self.near / pc.z)
 
+    def scene_depth(self, o, d, t):
+        """The depth of the world point o + t d seen from the world ray origin ``o`` (unit direction ``d``),
+        measured in scene space where the space is contracted: the scene-space distance
+        ||contract(o + t d) - contract(o)|| (bounded by the cube, so depths far out differ little); in a
+        straight space (world, NDC) the world depth ``t`` itself (Dr.Jit, differentiable in ``t``)."""
+        if not self.is_curved:
+            return t
+        step = self.from_world(o + t * d) - self.from_world(o)
+        return dr.sqrt(dr.squared_norm(step) + 1e-12)
+
     # ----------------------------------------------------------------- NumPy versions (set-up)
     def from_world_np(self, p):
         """NumPy (n, 3) version of :meth:`from_world`."""

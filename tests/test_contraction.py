@@ -38,6 +38,32 @@ def test_contraction_round_trips_and_its_step_length_is_its_derivative(shell):
     np.testing.assert_allclose(np.array(space.step_length(x, d)), np.linalg.norm(fd, axis=0), atol=5e-4)
 
 
+def test_scene_depth_is_the_contracted_chord_and_its_gradient_matches_finite_differences():
+    """From the centre along +x with M's half-size 0.5: the depth is 2t inside the cube, 2 - 1/(2t)
+    beyond it (shell 1), tending to 2 at infinity; in world space it is t itself."""
+    space = SceneSpace("contract", M, shell=1.0)
+    o, d = mi.Point3f(0, 0, 0), mi.Vector3f(1, 0, 0)
+    t = mi.Float([0.1, 0.4, 2.0, 50.0])
+    dr.enable_grad(t)
+    depth = space.scene_depth(o, d, t)
+    dr.backward(dr.sum(depth))
+    np.testing.assert_allclose(np.array(depth), [0.2, 0.8, 1.75, 1.99], rtol=1e-5)
+    np.testing.assert_allclose(np.array(dr.grad(t)), [2.0, 2.0, 0.125, 0.0002], rtol=1e-3)
+    # off the axes, from a point off the centre: the gradient against central differences
+    rng = np.random.default_rng(1)
+    o = mi.Point3f(*rng.normal(0, 0.3, (3, 50)))
+    dn = rng.normal(0, 1, (3, 50))
+    d = mi.Vector3f(*(dn / np.linalg.norm(dn, axis=0)))
+    t = mi.Float(rng.uniform(0.05, 20.0, 50))
+    dr.enable_grad(t)
+    dr.backward(dr.sum(space.scene_depth(o, d, t)))
+    eps = 1e-3
+    fd = (np.array(space.scene_depth(o, d, t + eps)) - np.array(space.scene_depth(o, d, t - eps))) / (2 * eps)
+    np.testing.assert_allclose(np.array(dr.grad(t)), fd, rtol=2e-2, atol=1e-4)
+    world = SceneSpace("world")
+    np.testing.assert_array_equal(np.array(world.scene_depth(o, d, mi.Float(3.0))), 3.0)
+
+
 def test_homogeneous_slab_in_the_shell_is_analytic():
     """Density sigma per scene unit over the scene-space box z in [1.5, 5/3] (world z in [1, 1.5]): a ray
     along z sees alpha = 1 - exp(-sigma L), L = 1/6 its scene length, to within a step."""

@@ -73,7 +73,8 @@ def test_the_smoothness_gradient_matches_finite_differences_and_leaves_colour_an
         np.testing.assert_allclose(got[i], (value(eps) - value(-eps)) / (2 * eps), rtol=2e-2, atol=1e-6)
 
 
-def test_the_fit_smooths_the_full_fields_depth_on_tiles_in_its_full_phase_only(tiny_dataset, tmp_path, monkeypatch):
+def test_the_fit_smooths_the_full_fields_depth_on_tiles_in_its_full_phase_only_and_until_told(
+        tiny_dataset, tmp_path, monkeypatch):
     from conftest import TINY_FIT
 
     from mi_voldis.fit import problem
@@ -97,12 +98,46 @@ def test_the_fit_smooths_the_full_fields_depth_on_tiles_in_its_full_phase_only(t
     assert len(calls) == steps  # once a step of the full phase, never in the background's refit
     tiles = int(0.5 * on.batch_rays) // 9
     assert all(c == (tiles * 9, tiles * 12, 4.0, True) for c in calls)
+    calls.clear()
+    run_fit(tiny_dataset, str(tmp_path / "early"), on.replace(depth_smooth_until=0.4), progress=False)
+    assert len(calls) == int(0.4 * steps)  # the full phase's first 40% of planned steps only
+
+
+def test_in_contracted_space_the_fit_smooths_the_scene_spaces_depth(tiny_dataset, tmp_path, monkeypatch):
+    """The depths the smoothness compares are the contracted space's (SceneSpace.scene_depth), bounded by
+    the cube's diagonal, where the world depths of the same rays run far past it."""
+    from conftest import TINY_FIT
+
+    from mi_voldis.fit import problem
+    from mi_voldis.fit.config import FitConfig
+    from mi_voldis.fit.run import run_fit
+    from mi_voldis.space import SceneSpace
+    seen, world = [], []
+    real, real_depth = problem.depth_smoothness_loss, SceneSpace.scene_depth
+
+    def record(depth, alpha, color, pairs, edge):
+        seen.append(np.array(depth))
+        return real(depth, alpha, color, pairs, edge)
+
+    def scene_depth(self, o, d, t):
+        world.append((self.kind, np.array(t)))
+        return real_depth(self, o, d, t)
+
+    monkeypatch.setattr(problem, "depth_smoothness_loss", record)
+    monkeypatch.setattr(SceneSpace, "scene_depth", scene_depth)
+    cfg = FitConfig.from_sources(None, TINY_FIT).replace(sh_degree=0, space="contract", contract_radius=0.25,
+                                                           depth_smooth=0.5, depth_smooth_until=0.2)
+    run_fit(tiny_dataset, str(tmp_path / "run"), cfg, progress=False)
+    assert seen and len(seen) == len(world) and all(kind == "contract" for kind, _ in world)
+    bound = 2 * np.sqrt(3) * (1 + cfg.contract_shell)
+    assert max(s.max() for s in seen) < bound < max(t.max() for _, t in world)
 
 
 def test_the_smoothness_settings_are_validated():
     from mi_voldis.fit.config import FitConfig
     for bad, why in (({"depth_smooth": -1}, "depth_smooth"), ({"depth_smooth_tile": 1}, "depth_smooth_tile"),
-                     ({"depth_smooth_rays": 0}, "depth_smooth_rays")):
+                     ({"depth_smooth_rays": 0}, "depth_smooth_rays"), ({"depth_smooth_until": 0}, "depth_smooth_until"),
+                     ({"depth_smooth_until": 1.5}, "depth_smooth_until")):
         with pytest.raises(ValueError, match=why):
             FitConfig.from_sources(None, bad)
 

@@ -52,14 +52,19 @@ def scene_row(entry, strategy):
     m = row["methods"]
     v = m["volume"]
     classic = max(m[n]["psnr_mask"] for n in ("telea", "ns") if n in m)
-    best_c = max(m[n]["consistency_psnr"] for n in m if n != "volume")
+    # consistency is None where no pixel of a mask warps into the other view through the depths (its
+    # background placed where that view cannot see it): then no margin, and the target is not met
+    best_c = max((m[n]["consistency_psnr"] for n in m if n != "volume" and m[n]["consistency_psnr"] is not None),
+                 default=None)
+    cons = v["consistency_psnr"]
     # the same background outside the hole against the 2D fills inside it: what the fields reach where
     # views see everything, so a removal as good as its surroundings scores about this margin
     outside = v.get("psnr_outside")
     return {"psnr_mask": v["psnr_mask"], "classic": classic, "margin": v["psnr_mask"] - classic,
             "outside_margin": None if outside is None else outside - classic,
-            "psnr_unseen": v.get("psnr_unseen"), "consistency": v["consistency_psnr"], "best_2d_consistency": best_c,
-            "consistency_margin": v["consistency_psnr"] - best_c, "coverage_iou": v.get("fg_coverage_iou"),
+            "psnr_unseen": v.get("psnr_unseen"), "consistency": cons, "best_2d_consistency": best_c,
+            "consistency_margin": None if cons is None or best_c is None else cons - best_c,
+            "coverage_iou": v.get("fg_coverage_iou"),
             "haze_mask": v.get("bg_haze_mask"), "haze_outside": v.get("bg_haze_outside"), "residue": v["residue"]}
 
 
@@ -72,7 +77,8 @@ def summary(results, strategy, half):
     if not rows:
         return None
     worst = min(rows, key=lambda s: rows[s]["margin"])
-    met = [s for s, r in rows.items() if r["margin"] >= TARGET_MARGIN and r["consistency_margin"] >= TARGET_CONSISTENCY
+    met = [s for s, r in rows.items() if r["margin"] >= TARGET_MARGIN
+           and r["consistency_margin"] is not None and r["consistency_margin"] >= TARGET_CONSISTENCY
            and (r["coverage_iou"] or 0) >= TARGET_IOU]
     bound = sorted(s for s, r in rows.items()
                    if r["outside_margin"] is not None and r["outside_margin"] < TARGET_MARGIN)
@@ -144,7 +150,7 @@ def lead(results, sheets=None):
                           f"{_f(r['psnr_unseen'])} | "
                           f"{_f(r['classic'])} | {r['margin']:+.2f} | {_f(r['outside_margin'], sign=True)} | "
                           f"{_f(r['consistency'])} | "
-                          f"{_f(r['best_2d_consistency'])} | {r['consistency_margin']:+.2f} | "
+                          f"{_f(r['best_2d_consistency'])} | {_f(r['consistency_margin'], sign=True)} | "
                           f"{_f(r['coverage_iou'])} | "
                           f"{_f(r['haze_mask'], 3)} / {_f(r['haze_outside'], 3)} | {_f(r['residue'])} |")
         md.append("")

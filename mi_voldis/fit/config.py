@@ -220,12 +220,16 @@ class FitConfig(Settings):
                                     "its scaling; 0: off)", low=0)
 
     depth_smooth: float = setting(0.0, "weight of an edge-aware depth smoothness on tiles of the full field's "
-                                       "training rays (losses.depth_smoothness_loss): a patch of floor that few "
-                                       "views see ends at the depth of the floor around it, not on a sheet of fog "
-                                       "in front of the one camera that sees it (after RegNeRF's depth "
-                                       "smoothness, on the photos' own pixels; 0: off, the default: at 10 it "
-                                       "clears that sheet on a removal-family orbit but costs other rigs 2-5 dB "
-                                       "held out, reports/notes.md)", low=0)
+                                       "training rays (losses.depth_smoothness_loss, depths measured in scene "
+                                       "space: SceneSpace.scene_depth): a patch of floor that few views see ends "
+                                       "at the depth of the floor around it, not on a sheet of fog in front of "
+                                       "the one camera that sees it (after RegNeRF's depth smoothness, on the "
+                                       "photos' own pixels); 0: off, the default (what 10 gains and costs on the "
+                                       "removal family and the captures: reports/notes.md)", low=0)
+    depth_smooth_until: float = setting(1.0, "the smoothness acts on the full phase's first steps only, this "
+                                             "fraction of its planned steps (1: all of them): a sheet of fog forms "
+                                             "on the coarse grids, the fine ones may then fit what the prior would "
+                                             "flatten", above=0, high=1)
     depth_smooth_rays: float = setting(0.25, "rays of that smoothness per step, fraction of batch_rays, in "
                                              "depth_smooth_tile x depth_smooth_tile tiles", above=0, high=1)
     depth_smooth_tile: int = setting(4, "edge of the smoothness's pixel tiles", low=2)

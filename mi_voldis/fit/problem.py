@@ -131,6 +131,14 @@ class FieldFit:
             return 0
         return np.inf if self.state.steps_full is None else int(view_from * self.state.steps_full)
 
+    def depth_smooth_end(self):
+        """The step at which the depth smoothness stops: ``depth_smooth_until`` of the full phase's planned
+        steps (every step where that setting is 1, or before the plan is made)."""
+        until = self.inputs.cfg.depth_smooth_until
+        if until >= 1.0 or self.state.steps_full is None:
+            return np.inf
+        return int(until * self.state.steps_full)
+
     def final_stage(self, role):
         """Whether the field of ``role`` is at the planned schedule's last resolution and ``lr_views_final``
         is off (the per-brick rates then stop)."""
@@ -225,12 +233,14 @@ class FieldFit:
             err = background_loss(photo(out["bg"], behind, view), color, mask)
             loss += err
             stats["psnr_bg"] = psnr_of(err)
-        if "full" in self.layers and cfg.depth_smooth > 0:  # depth smoothness on tiles of training rays
+        if "full" in self.layers and cfg.depth_smooth > 0 and step < self.depth_smooth_end():
+            # depth smoothness on tiles of training rays
             tile = cfg.depth_smooth_tile
             tiles = max(1, int(cfg.depth_smooth_rays * n) // (tile * tile))
             o, d, target, _, _ = self.bank.batch(rng, tiles * tile * tile, self.pool, tile)
             u = from_numpy(mi.Float, rng.random(tiles * tile * tile, np.float32))
             _, alpha, depth = render_rays(self.integrator, o, d, u, ("full",))["full"]
+            depth = self.inputs.space.scene_depth(o, d, depth)  # contracted: far depths squeezed together
             pairs = tile_pairs(tiles, tile)
             pairs = mi.UInt32(pairs[:, 0]), mi.UInt32(pairs[:, 1])
             loss += cfg.depth_smooth * depth_smoothness_loss(depth, alpha, target, pairs, cfg.depth_smooth_edge)
