@@ -497,7 +497,10 @@ def test_a_resumable_stage_is_kept_until_resume_or_restart(world, tmp_path, fake
     _refused("train", [data, "--out", out, "--resume", "--set", "steps_full=61"],
              f"{stage}: --resume of another job than the one staged (settings.steps_full: 60 -> 61)", kept, capsys)
     image = os.path.join(data, "images", sorted(os.listdir(os.path.join(data, "images")))[0])
-    os.utime(image, ns=(0, 0))
+    with open(image, "rb") as f:
+        photo = f.read()
+    with open(image, "wb") as f:  # one byte changed, the size kept
+        f.write(photo[:-1] + bytes([photo[-1] ^ 1]))
     _refused("train", [data, "--out", out, "--resume", "--set", "steps_full=60"],
              f"dataset_files.images/{os.path.basename(image)}: [", kept, capsys)
     _refused("train", [data, "--out", out, "--resume", "--restart"], "--resume and --restart exclude each other",
@@ -505,9 +508,16 @@ def test_a_resumable_stage_is_kept_until_resume_or_restart(world, tmp_path, fake
     # settings that may change do; --restart discards the stage (the fake fit then leaves a new one)
     assert _boundary.run(script("train").main, [data, "--out", out, "--restart", "--set", "steps_full=60"]) == 130
     with open(os.path.join(stage, ".mi-voldis")) as f:
-        assert json.load(f)["job"]["dataset_files"][f"images/{os.path.basename(image)}"][1] == 0
+        assert json.load(f)["job"]["dataset_files"][f"images/{os.path.basename(image)}"][0] == len(photo)
     assert _boundary.run(script("train").main, [data, "--out", out, "--resume", "--set", "steps_full=60",
                                                 "--set", "checkpoint_every=7"]) == 130
+    # the same dataset staged again (new modification times, the same bytes) is the same job
+    shutil.rmtree(data)
+    shutil.copytree(world["dataset"], data, copy_function=shutil.copyfile)
+    with open(image, "wb") as f:
+        f.write(photo[:-1] + bytes([photo[-1] ^ 1]))
+    os.utime(image, ns=(0, 0))
+    assert _boundary.run(script("train").main, [data, "--out", out, "--resume", "--set", "steps_full=60"]) == 130
 
 
 def test_a_second_job_on_the_same_output_is_refused(tmp_path):

@@ -4,7 +4,7 @@ RUN/ holds the fields (``<role>_grid.npz``), ``scene.xml`` (renders them through
 ``config.json`` (the settings and the dataset they were fitted on), ``metrics.json``, ``log.json``,
 ``training.png`` and ``previews/`` (and while it runs ``checkpoints/``). ``resume`` continues from
 RUN.partial/checkpoints/last.npz after a crash or kill -9, for the same dataset (its files' names,
-sizes and times) and settings (:data:`MAY_CHANGE` aside) only.
+sizes and contents) and settings (:data:`MAY_CHANGE` aside) only.
 """
 import os
 import sys

@@ -15,6 +15,7 @@ second job off the same ``OUT``; ``resume`` continues only the very job that was
 (:func:`check_resume`).
 """
 import contextlib
+import hashlib
 import json
 import os
 import shutil
@@ -241,10 +242,18 @@ def stamp(path):
     return [st.st_size, st.st_mtime_ns]
 
 
+def content_stamp(path):
+    """[size, the first 16 hex digits of the SHA-256 of its bytes] of the file ``path``: what a dataset's
+    file is, whatever its modification time (a copy, a re-staged or touched dataset keeps it)."""
+    with open(path, "rb") as f:
+        return [os.fstat(f.fileno()).st_size, hashlib.file_digest(f, "sha256").hexdigest()[:16]]
+
+
 def fingerprint(root, skip=()):
-    """{relative path: [size, mtime in ns]} of the files under ``root``, leaving out ``skip`` and the
+    """{relative path: :func:`content_stamp`} of the files under ``root``, leaving out ``skip`` and the
     folders of mi-voldis jobs in it (stages, old and locked outputs, runs and tasks; a
-    ``make_masks`` folder is kept: its masks are a dataset's)."""
+    ``make_masks`` folder is kept: its masks are a dataset's). Contents, not times: a resumed fit needs
+    the same pixels, and a dataset copied or staged again (new times) has them."""
     skip = {os.path.realpath(s) for s in skip}
     out = {}
     for d, dirs, files in os.walk(root):
@@ -252,7 +261,7 @@ def fingerprint(root, skip=()):
         for f in sorted(files):
             if f.endswith(".lock"):
                 continue
-            out[os.path.relpath(os.path.join(d, f), root)] = stamp(os.path.join(d, f))
+            out[os.path.relpath(os.path.join(d, f), root)] = content_stamp(os.path.join(d, f))
     return out
 
 
