@@ -162,6 +162,16 @@ def test_task_resumes_after_kill(tiny_run, tmp_path):
     proc = subprocess.Popen(args + [str(runs["killed"])], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     kill_after_checkpoint(proc, runs["killed"] / "camouflage.partial" / "checkpoints" / "last.npz", 10)
     assert (runs["killed"] / "camouflage" / "keep.txt").exists()
+    # the run's files are compared by content: a changed scene is another job, the same bytes with a new time
+    # (a run folder copied or restored) are not
+    scene = runs["killed"] / "scene.xml"
+    original = scene.read_bytes()
+    scene.write_bytes(original + b"\n")
+    refused = subprocess.run(args + [str(runs["killed"]), "--resume"], capture_output=True, text=True)
+    assert refused.returncode == 1 and refused.stderr.startswith("error: "), refused.stderr
+    assert "another job than the one staged (run_files.scene.xml: [" in refused.stderr
+    scene.write_bytes(original)
+    os.utime(scene, ns=(0, 0))
     done = subprocess.run(args + [str(runs["killed"]), "--resume"], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     out = runs["killed"] / "camouflage"

@@ -236,15 +236,10 @@ def _short(value):
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def stamp(path):
-    """[size, modification time in ns] of the file ``path``: what tells a changed input."""
-    st = os.stat(path)
-    return [st.st_size, st.st_mtime_ns]
-
-
 def content_stamp(path):
-    """[size, the first 16 hex digits of the SHA-256 of its bytes] of the file ``path``: what a dataset's
-    file is, whatever its modification time (a copy, a re-staged or touched dataset keeps it)."""
+    """[size, the first 16 hex digits of the SHA-256 of its bytes] of the file ``path``: what tells a
+    changed input (a dataset's photo, a run's field), whatever its modification time (a copy, a re-staged
+    or touched file keeps it)."""
     with open(path, "rb") as f:
         return [os.fstat(f.fileno()).st_size, hashlib.file_digest(f, "sha256").hexdigest()[:16]]
 

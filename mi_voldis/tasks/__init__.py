@@ -8,7 +8,7 @@ Optimised tasks all run through :func:`mi_voldis.optim.loop.optimize` (checkpoin
 import json
 import os
 
-from ..io.run_folder import check_output, dataset_inputs, run_files, staged, stamp
+from ..io.run_folder import check_output, content_stamp, dataset_inputs, run_files, staged
 from . import camouflage, nonneg, removal, semantic, transform
 from .base import FittedRun, TaskOutput
 from .settings import SETTINGS
@@ -45,7 +45,7 @@ def run_task(run_dir, task, settings=None, dataset=None, progress=True, out=None
     inputs = run_files(run_dir) + dataset_inputs(run.dataset.root)
     job = {"task": task, "settings": {k: v for k, v in settings.to_dict().items() if k != "resume"},
            "dataset": os.path.abspath(run.dataset.root),
-           "run_files": {os.path.relpath(path, run_dir): stamp(path) for path, _ in run_files(run_dir)}}
+           "run_files": {os.path.relpath(path, run_dir): content_stamp(path) for path, _ in run_files(run_dir)}}
     with staged(final, settings.resume, keep_checkpoints, inputs, restart, "optimize", job, MAY_CHANGE) as stage:
         TASKS[task](run, TaskOutput(run, task, settings, stage, final), progress)
     return final
