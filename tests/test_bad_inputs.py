@@ -520,6 +520,22 @@ def test_a_resumable_stage_is_kept_until_resume_or_restart(world, tmp_path, fake
     assert _boundary.run(script("train").main, [data, "--out", out, "--resume", "--set", "steps_full=60"]) == 130
 
 
+def test_the_dataset_fingerprint_reads_regular_files_only(tmp_path):
+    """A dataset folder's named pipe and dangling link are no content: fingerprinting it neither blocks
+    on the pipe nor fails on the link, and its files are named by path, size and content."""
+    data = tmp_path / "data"
+    (data / "images").mkdir(parents=True)
+    (data / "images" / "a.png").write_bytes(b"pixels")
+    os.mkfifo(data / "pipe")
+    os.symlink(tmp_path / "nowhere", data / "dangling")
+    code = ("import json, sys; from mi_voldis.io.run_folder import fingerprint; "
+            "print(json.dumps(fingerprint(sys.argv[1])))")
+    done = subprocess.run([sys.executable, "-c", code, str(data)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    assert list(got) == [os.path.join("images", "a.png")] and got[os.path.join("images", "a.png")][0] == 6
+
+
 def test_a_second_job_on_the_same_output_is_refused(tmp_path):
     """OUT.lock holds the pid of the job writing OUT: a live one refuses a second job, a dead one's is
     taken over, and the lock goes when the job ends."""

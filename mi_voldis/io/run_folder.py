@@ -247,16 +247,18 @@ def content_stamp(path):
 def fingerprint(root, skip=()):
     """{relative path: :func:`content_stamp`} of the files under ``root``, leaving out ``skip`` and the
     folders of mi-voldis jobs in it (stages, old and locked outputs, runs and tasks; a
-    ``make_masks`` folder is kept: its masks are a dataset's). Contents, not times: a resumed fit needs
-    the same pixels, and a dataset copied or staged again (new times) has them."""
+    ``make_masks`` folder is kept: its masks are a dataset's) and whatever is not a regular file (a
+    named pipe would block the read, a dangling link has nothing to read). Contents, not times: a resumed
+    fit needs the same pixels, and a dataset copied or staged again (new times) has them."""
     skip = {os.path.realpath(s) for s in skip}
     out = {}
     for d, dirs, files in os.walk(root):
         dirs[:] = sorted(x for x in dirs if not _job_folder(os.path.join(d, x), skip))
         for f in sorted(files):
-            if f.endswith(".lock"):
+            path = os.path.join(d, f)
+            if f.endswith(".lock") or not os.path.isfile(path):
                 continue
-            out[os.path.relpath(os.path.join(d, f), root)] = content_stamp(os.path.join(d, f))
+            out[os.path.relpath(path, root)] = content_stamp(path)
     return out
 
 
