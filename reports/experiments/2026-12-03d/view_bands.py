@@ -17,8 +17,12 @@ except OSError as e:
 if photo.shape != render.shape:
     raise SystemExit(f"view_bands.py: {sys.argv[2]} is {render.shape[1]}x{render.shape[0]}, the photo "
                      f"{photo.shape[1]}x{photo.shape[0]}")
-bands = int(sys.argv[3]) if len(sys.argv) > 3 else 9
-top = int(sys.argv[4]) if len(sys.argv) > 4 else 42
+counts = sys.argv[3:] + ["9", "42"][len(sys.argv) - 3:]
+if not all(c.isdigit() and int(c) > 0 for c in counts):
+    raise SystemExit(f"view_bands.py: BANDS and TOP_ROWS must be whole numbers above 0, got {' '.join(counts)}")
+bands, top = (int(c) for c in counts)
+if bands > photo.shape[0] or top >= photo.shape[0]:
+    raise SystemExit(f"view_bands.py: the photo has {photo.shape[0]} rows: BANDS {bands} or TOP_ROWS {top} too many")
 err = ((photo - render) ** 2).mean(axis=2)
 print(f"whole view {-10 * np.log10(err.mean()):.2f} dB")
 for rows in np.array_split(np.arange(err.shape[0]), bands):

@@ -25,6 +25,8 @@ for path in sys.argv[1:2] + sys.argv[4:5]:
         raise SystemExit(f"wall_trace.py: {path}: not a run folder (no full_grid.npz)")
 run, view = mi_voldis.load_run(sys.argv[1]), int(sys.argv[2])
 ds = run.dataset
+if view >= len(ds.cameras):
+    raise SystemExit(f"wall_trace.py: VIEW {view} is out of range (the run's dataset has {len(ds.cameras)} views)")
 cam = ds.cameras[view]
 o, d = _camera_rays(cam)
 pts, hit = median_points(run.integrator(), o, d)
