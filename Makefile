@@ -11,7 +11,7 @@ export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 .PHONY: setup demo test bench clean
 
 $(VENV)/.installed: pyproject.toml constraints.txt
-	test -x $(PY) || $(PYTHON) -m venv $(VENV)  # a venv the user made (any Python 3.11) is used as it is
+	test -x $(PY) || { $(PYTHON) -m venv $(VENV) && touch $(VENV)/.made-by-make; }  # a venv the user made (any Python 3.11) is used as it is
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -c constraints.txt -e ".[test]"
 	touch $@
@@ -28,5 +28,7 @@ bench: setup
 	$(PY) -m pip install --quiet -c constraints.txt -e ".[bench]"
 	$(PY) scripts/bench.py
 
+# removes only the venv this Makefile made; out/ holds results (the demo's, the bench's) and is left to the user
 clean:
-	rm -rf $(VENV) out
+	@if [ -f $(VENV)/.made-by-make ]; then rm -rf $(VENV); echo "removed $(VENV)"; \
+	elif [ -e $(VENV) ]; then echo "$(VENV): not made by make (no .made-by-make in it), so it is kept"; fi

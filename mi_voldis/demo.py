@@ -13,9 +13,9 @@ import numpy as np
 
 from .data import load_dataset
 from .fit.config import FitConfig
-from .fit.run import run_fit
+from .fit.run import finished, run_fit
 from .io.images import contact_sheet, display_to_uint8, write_png
-from .io.run_folder import staging
+from .io.run_folder import claim, staging
 from .synth.make import make_dataset
 from .tasks import run_task
 
@@ -29,15 +29,19 @@ def run_demo(out, scene, spp=128, progress=True, composition=None):
     the object (default: the best against the ground truth)."""
     name = os.path.splitext(os.path.basename(scene))[0]
     data, run = os.path.join(out, "data", name), os.path.join(out, "run", name)
+    claim(out, "demo")  # the sheet and turntable are written straight into it
     timings = {}
     t = time.perf_counter()
     if not os.path.isfile(os.path.join(data, "transforms.json")):  # deterministic: reuse when present
         make_dataset(scene, data, spp=spp, progress=progress)
     timings["dataset"] = time.perf_counter() - t
     t = time.perf_counter()
-    # a demo killed during its fit continues it (the staged job's dataset and settings are checked)
-    resumable = os.path.isfile(os.path.join(staging(run), "checkpoints", "last.npz"))
-    fit = run_fit(data, run, FitConfig(), resume=resumable, progress=progress)
+    if finished(run, data, []):  # a finished fit of this dataset with the defaults (its edits live inside it)
+        with open(os.path.join(run, "metrics.json")) as f:
+            fit = json.load(f)
+    else:  # a demo killed during its fit continues it (the staged job's dataset and settings are checked)
+        resumable = os.path.isfile(os.path.join(staging(run), "checkpoints", "last.npz"))
+        fit = run_fit(data, run, FitConfig(), resume=resumable, progress=progress)
     timings["fit"] = time.perf_counter() - t
     results = {}
     for task, options in EDITS:

@@ -4,6 +4,8 @@ import os
 
 import imageio.v3 as iio
 
+from .io.run_folder import temp_beside
+
 
 def has_mp4():
     try:
@@ -20,11 +22,11 @@ def write_video(stem, frames, fps=24):
         h, w = frames[0].shape[:2]
         frames = [f[: h - h % 2, : w - w % 2] for f in frames]
         path = stem + ".mp4"
-        tmp = stem + ".tmp.mp4"
+        tmp = temp_beside(path, ".mp4")
         iio.imwrite(tmp, frames, extension=".mp4", fps=fps, codec="libx264", macro_block_size=1)
     else:
         path = stem + ".gif"
-        tmp = stem + ".tmp.gif"
+        tmp = temp_beside(path, ".gif")
         iio.imwrite(tmp, frames, extension=".gif", duration=1000.0 / fps, loop=0)
     os.replace(tmp, path)
     return path

@@ -548,16 +548,22 @@ def test_a_second_job_on_the_same_output_is_refused(tmp_path):
     assert not os.path.exists(out + ".lock") and os.path.isdir(out)
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    with open(out + ".lock", "w") as f:
+    with open(out + ".lock", "w") as f:  # a user's file of that name, even one holding a dead pid, stays
         f.write(f"{dead.pid}\n")
+    with pytest.raises(ValueError, match="the lock is not a mi-voldis job's"):
+        with staged(out, made_by="test"):
+            pass
+    assert open(out + ".lock").read() == f"{dead.pid}\n"
+    with open(out + ".lock", "w") as f:
+        f.write(f"mi-voldis {dead.pid}\n")
     with staged(out, made_by="test") as stage:
         with open(out + ".lock") as f:
-            assert int(f.read()) == os.getpid()
+            assert f.read() == f"mi-voldis {os.getpid()}\n"
         open(os.path.join(stage, "x"), "w").close()
     assert os.path.isfile(os.path.join(out, "x")) and not os.path.exists(out + ".lock")
     with open(out + ".lock", "w") as f:
         f.write("not a pid")
-    with pytest.raises(ValueError, match="holds no process id"):
+    with pytest.raises(ValueError, match="not a mi-voldis job's"):
         with staged(out, made_by="test"):
             pass
 

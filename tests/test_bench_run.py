@@ -32,7 +32,7 @@ def test_a_finished_run_is_recognised_with_its_resolved_settings(tiny_run):
 
     from conftest import TINY_FIT
 
-    from mi_voldis.bench.run import finished
+    from mi_voldis.fit.run import finished
     dataset = json.load(open(os.path.join(tiny_run, "config.json")))["dataset"]["path"]
     assert finished(tiny_run, dataset, TINY_FIT)
     assert not finished(tiny_run, dataset, TINY_FIT + ["seed=1"])  # other settings: fitted again
@@ -47,9 +47,9 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
 
     from conftest import TINY_FIT
 
-    from mi_voldis.bench.run import finished
     from mi_voldis.bench.strategies import same_settings
     from mi_voldis.fit.config import FitConfig
+    from mi_voldis.fit.run import finished
     old = tmp_path / "old"
     shutil.copytree(tiny_run, old)
     with open(old / "config.json") as f:

@@ -120,6 +120,49 @@ def test_a_bench_with_nothing_to_run_stops_with_one_line_and_keeps_the_last_repo
     assert not (tmp_path / "work").exists()
 
 
+def test_a_bench_report_goes_only_into_a_folder_the_bench_made(tmp_path, monkeypatch):
+    """--report naming a user's folder stops before any work with one line, the folder untouched; a new one
+    is made and marked up front; --quick's report is not the full report's folder."""
+    import voldis_cli.bench as cli
+    from mi_voldis.bench import run
+    from mi_voldis.io.run_folder import made_by
+    notes = tmp_path / "notes"
+    notes.mkdir()
+    (notes / "bench.md").write_text("mine")
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["--removal", "--scenes", "tabletop", "--work", str(tmp_path / "work"), "--report", str(notes)])
+    assert str(stop.value) == (f"error: {notes}: exists and was not written by bench (no .mi-voldis naming it), "
+                               "so nothing is written into it; move it away or choose another output folder")
+    assert [p.name for p in notes.iterdir()] == ["bench.md"] and (notes / "bench.md").read_text() == "mine"
+    assert not (tmp_path / "work").exists()
+    seen = {}
+    monkeypatch.setattr(run, "run_all", lambda quick, work, report, scenes: seen.update(report=report) or {})
+    monkeypatch.setattr("mi_voldis.bench.report.write", lambda results, report, command: None)
+    monkeypatch.chdir(tmp_path)
+    cli.main(["--quick", "--quiet"])
+    assert seen["report"] == "out/bench/quick" and made_by("out/bench/quick") == {"bench"}
+    assert made_by(os.path.join(ROOT, "reports")) == {"bench"}  # the committed reports are the bench's
+
+
+def test_the_bench_helpers_stop_with_one_line_on_a_bad_run_or_output(tmp_path):
+    from mi_voldis.bench import effects, masks
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    user = tmp_path / "mine"
+    user.mkdir()
+    (user / "a.txt").write_text("mine")
+    (tmp_path / "config.json").write_text("{}")  # tmp_path: a run's settings, so that OUT is what is refused
+    for module, name in ((masks, "masks"), (effects, "effects")):
+        for argv, expected in (([str(run_dir)], f"usage: python -m mi_voldis.bench.{name} RUN OUT"),
+                               ([str(run_dir), str(tmp_path / "o")], f"error: {run_dir}: no config.json"),
+                               ([str(tmp_path), str(user)], f"error: {user}: exists and was not written by "
+                                                            f"bench_{name}")):
+            with pytest.raises(SystemExit) as e:
+                module.main(argv)
+            assert str(e.value).startswith(expected) and "\n" not in str(e.value), (argv, str(e.value))
+    assert [p.name for p in user.iterdir()] == ["a.txt"] and not (tmp_path / "o").exists()
+
+
 def test_a_refit_takes_the_background_settings_of_today_and_the_rest_of_the_run(tmp_path):
     """A run fitted under older background defaults is refitted with today's (the bench and the hand
     command agree); its other settings stay, and --set still wins."""

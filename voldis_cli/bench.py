@@ -11,8 +11,10 @@
                             record on and off; with several batches the record at each)
 
 Writes reports/bench.md (tables with date, machine, versions and commands), reports/bench.json and
-PNG plots. --quick is a smoke run of a few minutes; the full run fits every bundled scene, capture and
-random seed with the default budgets (hours on 2 cores); --scenes picks some. --removal writes
+PNG plots, into a --report folder the bench made (its .mi-voldis names it) or a new or empty one, checked
+before anything runs. --quick is a smoke run of a few minutes (its report goes to out/bench/quick); the
+full run fits every bundled scene, capture and random seed with the default budgets (hours on 2 cores);
+--scenes picks some. --removal writes
 reports/removal.md instead: every background strategy on the bundled and random ground-truth scenes;
 --masks writes reports/masks.md: masks from two views (scripts/make_masks.py) and removal with them;
 --effects writes reports/effects.md: removal with the object's shadow given as effect masks;
@@ -34,7 +36,9 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="small configurations only (a few minutes)")
     ap.add_argument("--work", default="out/bench", help="datasets, runs and logs")
-    ap.add_argument("--report", default="reports", help="where bench.md and the plots go")
+    ap.add_argument("--report", help="where bench.md and the plots go (default: reports, and out/bench/quick for "
+                                     "--quick, so a smoke run never replaces the full report); a folder the "
+                                     "bench made, or a new or empty one")
     ap.add_argument("--step-profile", action="store_true",
                     help="only profile one training step (128^3, 128 samples/ray, 16k rays) by kernel")
     ap.add_argument("--rays", default="random", choices=("random", "tiles"),
@@ -62,13 +66,14 @@ def main(argv=None):
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--quiet", action="store_true", help="print nothing but errors (the children run quietly anyway)")
     args = ap.parse_args(argv)
+    args.report = args.report or ("out/bench/quick" if args.quick else "reports")
     if args.lpips_weights and not args.spinnerf:
         ap.error("--lpips-weights is for --spinnerf")
     if args.sets:
         if not args.family:
             ap.error("--set is for --family (a trial of a default on the removal family)")
         for flag in ("report", "work"):  # a trial never writes over the default's report or refits its runs
-            if os.path.realpath(getattr(args, flag)) == os.path.realpath(ap.get_default(flag)):
+            if os.path.realpath(getattr(args, flag)) == os.path.realpath(ap.get_default(flag) or "reports"):
                 ap.error(f"--set: a trial goes in its own folders (give --{flag} DIR), not the default's")
         from mi_voldis.bench.family import load
         earlier = load(args.report)
@@ -105,11 +110,13 @@ def main(argv=None):
     from mi_voldis.bench.family import run_family, write_family
     from mi_voldis.bench.run import run_all, run_effects, run_masks, run_removal, section_scenes
     from mi_voldis.bench.spinnerf import section as spinnerf_section
+    from mi_voldis.io.run_folder import claim
     scenes = args.scenes.split(",") if args.scenes else None
     section = next((flag for flag in ("removal", "masks", "effects", "family", "spinnerf") if getattr(args, flag)),
                    "quick" if args.quick else "all")
-    try:  # before anything runs: a bad --scenes never overwrites the last report
+    try:  # before anything runs: a bad --scenes or --report never costs a run its report
         section_scenes(section, scenes)
+        claim(args.report, "bench")
     except ValueError as e:
         raise SystemExit(f"error: {e}") from None
     for flag, (measure, write) in {"removal": (run_removal, report.write_removal),

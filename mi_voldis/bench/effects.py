@@ -56,11 +56,20 @@ def effect_copy(dataset, effects, names, out):
 
 
 def main(argv=None):
-    run, out = (argv or sys.argv[1:])[:2]
+    args = list(argv or sys.argv[1:])
+    if len(args) < 2:
+        raise SystemExit("usage: python -m mi_voldis.bench.effects RUN OUT")
+    run, out = args[:2]
     from ..data import load_dataset
     from ..fit.config import FitConfig
     from ..inpaint2d import inpainter
-    from ..io.run_folder import write_json
+    from ..io.run_folder import claim, write_json
+    if not os.path.isfile(os.path.join(run, "config.json")):
+        raise SystemExit(f"error: {run}: no config.json (not a fitted run)")
+    try:
+        claim(out, "bench_effects")
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
     from ..metrics import dilate, psnr, score_dilation
     from .strategies import main as refit
     with open(os.path.join(run, "config.json")) as f:

@@ -43,11 +43,20 @@ def masked_copy(dataset, masks, out):
 
 
 def main(argv=None):
-    run, out = (argv or sys.argv[1:])[:2]
+    args = list(argv or sys.argv[1:])
+    if len(args) < 2:
+        raise SystemExit("usage: python -m mi_voldis.bench.masks RUN OUT")
+    run, out = args[:2]
     from ..data import load_dataset
     from ..fit.config import FitConfig
     from ..io.images import write_png
-    from ..io.run_folder import write_json
+    from ..io.run_folder import claim, write_json
+    if not os.path.isfile(os.path.join(run, "config.json")):
+        raise SystemExit(f"error: {run}: no config.json (not a fitted run)")
+    try:
+        claim(out, "bench_masks")
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
     from ..masks3d import make_masks
     from ..metrics import iou
     from .strategies import main as refit

@@ -21,6 +21,7 @@ import subprocess
 import sys
 import time
 
+from ..io.run_folder import made_by
 from ..synth import bundled_scene, family
 from . import content, machine, rays, throughput
 from .strategies import BACKGROUND_SETTINGS
@@ -134,6 +135,7 @@ def fit(dataset, out, sets, log_dir, keep=False):
     dataset and settings already in ``out`` is reused (delete it to fit again). ``keep``: the run keeps
     its final checkpoint (the removal section refits the background from it, so that settings of the
     background alone may differ)."""
+    from ..fit.run import finished
     args = ["scripts/train.py", dataset, "--out", out, "--quiet"] + (["--keep-checkpoints"] if keep else [])
     for s in sets:
         args += ["--set", s]
@@ -151,25 +153,6 @@ def fit(dataset, out, sets, log_dir, keep=False):
             "curve": curve, "folder_mib": folder_bytes(out) / 2 ** 20, "command": "python " + " ".join(args),
             "reused": seconds is None, "fitted": time.strftime("%Y-%m-%d %H:%M", time.gmtime(os.path.getmtime(
                 os.path.join(out, "metrics.json"))))}
-
-
-def finished(out, dataset, sets, ignore=()):
-    """``out`` holds a finished fit of ``dataset`` with exactly the settings ``sets`` give (but those
-    named in ``ignore``)."""
-    from ..fit.config import FitConfig
-    try:
-        with open(os.path.join(out, "config.json")) as f:
-            config = json.load(f)
-    except (OSError, ValueError):
-        return False
-    from ..fit.schedule import backend
-    record = config.get("dataset", {})
-    config = FitConfig.recorded(config)  # what was fitted, on what, aside; settings added since at their old values
-    same_data = os.path.realpath(record.get("path", "")) == os.path.realpath(dataset)
-    expected = FitConfig.from_sources(None, sets).for_backend(backend()).to_dict()  # 'auto' as a run records it
-    for key in ignore:
-        config.pop(key, None), expected.pop(key, None)
-    return os.path.isfile(os.path.join(out, "metrics.json")) and same_data and config == expected
 
 
 def folder_bytes(path):
@@ -323,7 +306,8 @@ def run_masks(work, report_dir, scenes=None):
             child(["-m", "mi_voldis.bench.strategies", run["out"], default, base, "--refit"],
                   os.path.join(logs, f"removal_{scene}_{default}.log"))
         out = os.path.join(work, "masks", scene)
-        shutil.rmtree(out, ignore_errors=True)
+        if made_by(out) == {"bench_masks"}:  # an earlier run's, made afresh; anything else is refused (bench.masks)
+            shutil.rmtree(out)
         args = ["-m", "mi_voldis.bench.masks", run["out"], out]
         wall = child(args, os.path.join(logs, f"masks_{scene}.log"))
         with open(os.path.join(out, "metrics.json")) as f:

@@ -6,6 +6,7 @@ RUN/ holds the fields (``<role>_grid.npz``), ``scene.xml`` (renders them through
 RUN.partial/checkpoints/last.npz after a crash or kill -9, for the same dataset (its files' names,
 sizes and contents) and settings (:data:`MAY_CHANGE` aside) only.
 """
+import json
 import os
 import sys
 import time
@@ -27,6 +28,23 @@ PREVIEW = "previews"
 CHECKPOINT = os.path.join("checkpoints", "last.npz")
 # settings a resumed fit may change: they shape no result
 MAY_CHANGE = ("checkpoint_every", "checkpoint_minutes", "eval_every")
+
+
+def finished(out, dataset, sets, ignore=()):
+    """``out`` holds a finished fit of ``dataset`` with exactly the settings ``sets`` (``--set`` strings)
+    give, but those named in ``ignore``: what a caller may reuse instead of fitting again."""
+    try:
+        with open(os.path.join(out, "config.json")) as f:
+            config = json.load(f)
+    except (OSError, ValueError):
+        return False
+    record = config.get("dataset", {})
+    config = FitConfig.recorded(config)  # what was fitted, on what, aside; settings added since at their old values
+    same_data = os.path.realpath(record.get("path", "")) == os.path.realpath(dataset)
+    expected = FitConfig.from_sources(None, sets).for_backend(backend()).to_dict()  # 'auto' as a run records it
+    for key in ignore:
+        config.pop(key, None), expected.pop(key, None)
+    return os.path.isfile(os.path.join(out, "metrics.json")) and same_data and config == expected
 
 
 def run_fit(dataset_path, out, cfg=None, resume=False, progress=True, fmt="auto", holdout=8, keep_checkpoints=False,

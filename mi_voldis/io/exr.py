@@ -9,6 +9,8 @@ import os
 import numpy as np
 import OpenEXR
 
+from .run_folder import temp_beside
+
 
 def write_exr(path, channels, header=None):
     """Write ``{name: (H, W) float array}`` as a ZIP-compressed float32 scanline EXR, with the extra
@@ -22,7 +24,7 @@ def write_exr(path, channels, header=None):
         raise ValueError(f"{path}: all channels must be 2D arrays of one size, got {sorted(shapes)}")
     data = {name: np.ascontiguousarray(value, dtype=np.float32) for name, value in channels.items()}
     header = {**(header or {}), "compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    tmp = f"{path}.tmp.exr"
+    tmp = temp_beside(path, ".exr")
     with OpenEXR.File(header, data) as f:
         f.write(tmp)
     os.replace(tmp, path)

@@ -10,6 +10,8 @@ import os
 import imageio.v3 as iio
 import numpy as np
 
+from .run_folder import temp_beside
+
 
 def linear_to_srgb(x):
     """IEC 61966-2-1 transfer function, input clipped to [0, 1]."""
@@ -62,7 +64,7 @@ def depth_to_uint8(z, alpha=None, bar=True):
 
 def write_png(path, image):
     """Write a uint8 image, via a temporary file so nothing is left half-written."""
-    tmp = f"{path}.tmp.png"
+    tmp = temp_beside(path, ".png")
     iio.imwrite(tmp, image)
     os.replace(tmp, path)
 

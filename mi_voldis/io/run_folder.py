@@ -8,16 +8,19 @@ job's ``OUT`` holds no checkpoints.
 
 Nothing a user has is lost: before any work :func:`check_output` refuses an ``OUT`` that is, holds
 or lies inside one of the job's inputs (real paths, so symbolic links count), an ``OUT`` that is a
-symbolic link, and an existing ``OUT``, ``OUT.old`` or ``OUT.partial`` that no mi-voldis job made
-(every folder a job stages holds :data:`MARKER`, naming the program and recording the job); a
-resumable ``OUT.partial`` is kept unless ``restart``. ``OUT.lock`` (the pid of the job) keeps a
-second job off the same ``OUT``; ``resume`` continues only the very job that was staged
-(:func:`check_resume`).
+symbolic link, an existing ``OUT``, ``OUT.old`` or ``OUT.partial`` that no mi-voldis job made
+(every folder a job stages holds :data:`MARKER`, naming the program and recording the job), and a
+job's ``OUT`` or ``OUT.old`` that holds anything its job did not write (the marker lists what the job
+left when it was swapped into place: a file the user added, or another job's output made inside it,
+such as a task's ``RUN/removal``); a resumable ``OUT.partial`` is kept unless ``restart``. ``OUT.lock``
+(the pid of the job) keeps a second job off the same ``OUT``; ``resume`` continues only the very job that
+was staged (:func:`check_resume`).
 """
 import contextlib
 import hashlib
 import json
 import os
+import secrets
 import shutil
 import xml.etree.ElementTree as ET
 
@@ -36,6 +39,9 @@ RESUMABLE = "holds the checkpoint of an unfinished job: --resume continues it, -
 
 def _old(out):
     return out.rstrip("/") + ".old"
+
+
+LOCK_OWNER = "mi-voldis"  # a lock holds "mi-voldis PID": only such a file, its process gone, is taken over
 
 
 def _lock(out):
@@ -57,26 +63,69 @@ def write_marker(folder, made_by, job=None):
 
 
 def made_by(folder):
-    """The programs that may have written ``folder``: the one its :data:`MARKER` names, or for an
-    earlier version's output without one, those whose output it looks like (a run or task folder, a
-    checkpointed stage, a rendered dataset); empty when no mi-voldis job made it."""
+    """The program that wrote ``folder`` as the set its :data:`MARKER` names; empty when there is no
+    marker. A folder is never taken for a job's by its look (a user's scene folder may hold a
+    ``scene.xml`` and a ``config.json`` too)."""
     record = read_marker(folder)
-    if record is not None:
-        return {record.get("made_by")}
-    has = lambda *p: os.path.isfile(os.path.join(folder, *p))  # noqa: E731
-    if has("config.json") and has("scene.xml") or has(CHECKPOINTS, "last.npz"):
-        return {"train", "optimize"}
-    try:
-        with open(os.path.join(folder, "transforms.json")) as f:
-            meta = json.load(f)
-    except (OSError, ValueError):
-        return set()
-    return {"make_dataset"} if isinstance(meta, dict) and {"scene", "seed", "spp"} <= set(meta) else set()
+    return set() if record is None else {record.get("made_by")}
 
 
 def made_here(folder):
     """Whether ``folder`` was written by a mi-voldis job (:func:`made_by`)."""
     return bool(made_by(folder))
+
+
+def claim(out, program):
+    """Make ``out`` a folder of ``program``, which writes into it in place (not staged): it must be new,
+    empty, or made by ``program`` before (its :data:`MARKER`); anything else raises ``ValueError`` and is
+    left as it is."""
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise ValueError(f"{out}: exists and is not a folder; choose another output folder")
+    if os.path.isdir(out) and os.listdir(out) and made_by(out) != {program}:
+        raise ValueError(f"{out}: exists and was not written by {program} (no {MARKER} naming it), so nothing is "
+                         "written into it; move it away or choose another output folder")
+    os.makedirs(out, exist_ok=True)
+    if not made_by(out):
+        write_marker(out, program)
+
+
+def _entries(folder):
+    """Every path under ``folder`` (folders, files, links; links not followed), relative to it, but the
+    marker."""
+    found = []
+    for d, dirs, files in os.walk(folder):
+        found += [os.path.relpath(os.path.join(d, e), folder) for e in dirs + files]
+    return sorted(e for e in found if e != MARKER)
+
+
+def foreign(folder, shown=3):
+    """The first ``shown`` paths in the job folder ``folder`` that its job did not leave there (outermost
+    only: a foreign folder is named, not its contents), by the list its :data:`MARKER` records when the
+    job is swapped into place (:func:`commit`); a folder written before jobs kept that list has none."""
+    record = read_marker(folder)
+    left = record.get("files") if isinstance(record, dict) else None
+    if not isinstance(left, list):
+        return []
+    left, found = set(left), []
+    for d, dirs, files in os.walk(folder):
+        rel = os.path.relpath(d, folder)
+        for e in sorted(dirs + files):
+            path = os.path.normpath(os.path.join(rel, e))
+            if path not in left and path != MARKER:
+                found.append(path)
+        dirs[:] = [e for e in dirs if os.path.normpath(os.path.join(rel, e)) in left]
+        if len(found) >= shown:
+            break
+    return found[:shown]
+
+
+def _refuse_foreign(path, verb):
+    extra = foreign(path)
+    if extra:
+        program = " or ".join(sorted(str(p) for p in made_by(path)))
+        raise ValueError(f"{path}: holds {', '.join(extra)}, which the {program} job that wrote it did not write, "
+                         f"so it is not {verb}; move {'it' if len(extra) == 1 else 'them'} away or choose another "
+                         "output folder")
 
 
 def _inside(path, folder):
@@ -139,10 +188,12 @@ def check_output(out, inputs=(), resume=False, restart=False, min_free=MIN_FREE_
         if os.path.exists(path) and not os.path.isdir(path):
             raise ValueError(f"{path}: exists and is not a folder (output folders are replaced whole; move the "
                              "file away or choose another --out)")
+        verb = "replaced" if path == out else "removed"
         if os.path.isdir(path) and os.listdir(path) and not made_here(path):
-            verb = "replaced" if path == out else "removed"
             raise ValueError(f"{path}: exists and was not written by mi-voldis (no {MARKER} in it), so it is not "
                              f"{verb}; move it away or choose another output folder")
+        if os.path.isdir(path):
+            _refuse_foreign(path, verb)
     if program and os.path.isdir(out) and os.listdir(out) and program not in made_by(out):
         raise ValueError(f"{out}: holds the output of {' or '.join(sorted(made_by(out)))}, not of {program}, so it "
                          "is not replaced; choose another output folder")
@@ -174,8 +225,9 @@ def _alive(pid):
 
 @contextlib.contextmanager
 def locked(out):
-    """Hold ``OUT.lock`` (made with O_EXCL, holding this process's id) while the block runs: a second
-    job on the same ``OUT`` is refused; a lock left by a process that is gone is taken over."""
+    """Hold ``OUT.lock`` (made with O_EXCL, holding :data:`LOCK_OWNER` and this process's id) while the
+    block runs: a second job on the same ``OUT`` is refused; a lock a job left whose process is gone is
+    taken over (any other file of that name is left alone, and the job refused)."""
     path = _lock(out)
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     while True:
@@ -185,17 +237,20 @@ def locked(out):
         except FileExistsError:
             try:
                 with open(path) as f:
-                    pid = int(f.read().strip())
+                    owner, pid = f.read().split()
+                pid = int(pid) if owner == LOCK_OWNER else None
             except (OSError, ValueError):
-                raise ValueError(f"{path}: another job holds {out} (or the lock holds no process id; remove it if "
-                                 "no job is writing there)") from None
+                pid = None
+            if pid is None:  # not a lock a job wrote: it is not taken over
+                raise ValueError(f"{path}: another job holds {out} (or the lock is not a mi-voldis job's; remove it "
+                                 "if no job is writing there)") from None
             if _alive(pid):
                 raise ValueError(f"{out}: another job (pid {pid}) is writing it; wait for it to finish or choose "
                                  "another output folder") from None
             with contextlib.suppress(FileNotFoundError):
                 os.remove(path)  # stale: the process that held it is gone
     with os.fdopen(fd, "w") as f:
-        f.write(f"{os.getpid()}\n")
+        f.write(f"{LOCK_OWNER} {os.getpid()}\n")
     try:
         yield
     finally:
@@ -333,12 +388,18 @@ def _has_checkpoint(stage):
 
 def commit(stage, out, program="mi-voldis"):
     """Replace ``out`` (made by a job, or empty: :func:`check_output`) by the finished ``stage`` with
-    renames only. ``OUT.old`` is removed only when a job made it."""
+    renames only, first recording in the stage's :data:`MARKER` what the job leaves (:func:`foreign`).
+    ``OUT.old`` is removed only when a job made it and holds nothing else."""
     old = _old(out)
     for folder in (old, out):
         if os.path.isdir(folder) and os.listdir(folder) and not made_here(folder):
             raise ValueError(f"{folder}: appeared while the job ran and was not written by mi-voldis; the result "
                              f"stays in {stage}")
+        if os.path.isdir(folder) and foreign(folder):
+            raise ValueError(f"{folder}: {', '.join(foreign(folder))} appeared in it while the job ran; the result "
+                             f"stays in {stage}")
+    record = read_marker(stage) or {"made_by": program, "job": None}
+    write_json(os.path.join(stage, MARKER), {**record, "files": _entries(stage)})
     shutil.rmtree(old, ignore_errors=True)
     if os.path.exists(out):
         if read_marker(out) is None:  # an earlier version's output, or an empty folder: marked before it moves
@@ -356,7 +417,7 @@ class Checkpoint:
 
     def save(self, arrays, meta):
         os.makedirs(os.path.dirname(self.path), exist_ok=True)
-        tmp = self.path + ".tmp.npz"
+        tmp = temp_beside(self.path, ".npz")
         np.savez(tmp, __meta__=np.frombuffer(json.dumps(meta).encode(), np.uint8), **arrays)
         os.replace(tmp, self.path)
 
@@ -369,10 +430,21 @@ class Checkpoint:
         return arrays, meta
 
 
+def temp_beside(path, suffix=""):
+    """A new, unused name in ``path``'s folder for the temporary file a writer then renames to ``path``
+    (hidden, random, ending in ``suffix`` so that writers that choose a format by extension keep it): no
+    fixed name that could be a user's file."""
+    folder, name = os.path.split(path)
+    while True:
+        tmp = os.path.join(folder, f".{name}.{secrets.token_hex(4)}.tmp{suffix}")
+        if not os.path.lexists(tmp):
+            return tmp
+
+
 def write_json(path, data):
     """Write ``data`` as strict JSON via a temporary file (never half-written); NaN and infinities,
     which JSON cannot hold, become null."""
-    tmp = path + ".tmp"
+    tmp = temp_beside(path)
     with open(tmp, "w") as f:
         json.dump(_finite(data), f, indent=1, allow_nan=False)
     os.replace(tmp, path)

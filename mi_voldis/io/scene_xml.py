@@ -4,6 +4,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from .run_folder import temp_beside
 from .vol import write_vol
 
 
@@ -44,7 +45,7 @@ def save_grid(directory, stem, layout, values, to_world, density_scale=1.0, sh_g
     to_world = np.asarray(to_world, dtype=np.float64)
     corners = np.array([[x, y, z, 1.0] for x in (0, 1) for y in (0, 1) for z in (0, 1)]) @ to_world.T
     name = f"{stem}_grid.npz"
-    tmp = os.path.join(directory, name + ".tmp.npz")
+    tmp = temp_beside(os.path.join(directory, name), ".npz")
     extra = {} if view is None else {"view": np.asarray(view, np.float32)}
     np.savez(tmp, table=layout.table, data=np.asarray(values, np.float32), vertices=np.array(layout.shape),
              brick=np.array(layout.brick), bbox=np.stack([corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)]),
@@ -104,7 +105,7 @@ def write_scene(path, fields, properties=None, sensors=()):
         body.append(f'<medium type="radiance_field" name="{role}" id="{role}">{inner}</medium>')
     xml = ['<scene version="3.0.0">', ABOUT, '<integrator type="voldis" id="integrator">', *body, '</integrator>',
            *sensors, '</scene>', '']
-    tmp = f"{path}.tmp"
+    tmp = temp_beside(path)
     with open(tmp, "w") as f:
         f.write("\n".join(xml))
     os.replace(tmp, path)

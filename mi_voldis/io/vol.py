@@ -12,6 +12,8 @@ import os
 import mitsuba as mi
 import numpy as np
 
+from .run_folder import temp_beside
+
 HEADER_BYTES = 48
 BBOX_OFFSET = 24
 
@@ -56,7 +58,7 @@ def write_vol(path, values, bbox_min=(0, 0, 0), bbox_max=(1, 1, 1)):
     if values.ndim != 4:
         raise ValueError(f"{path}: volume data must have shape (Z, Y, X, C), got {values.shape}")
     path = str(path)
-    tmp = path + ".tmp"
+    tmp = temp_beside(path)
     mi.VolumeGrid(values).write(tmp)
     bbox = np.concatenate([np.asarray(bbox_min, np.float32), np.asarray(bbox_max, np.float32)])
     with open(tmp, "r+b") as f:
