@@ -216,6 +216,20 @@ def mask_inputs(dataset, run_dir, given):
                                                                          (given or {}).values()]
 
 
+def mask_names(names, dataset):
+    """The mask file of each view, ``<image stem>.png`` (the loaders match masks to images by stem); two
+    images of one stem would write one file, so they raise ``ValueError`` naming both."""
+    out, seen = [], {}
+    for name in names:
+        stem = os.path.splitext(os.path.basename(name))[0]
+        if stem in seen:
+            raise ValueError(f"{dataset}: images {seen[stem]} and {name} share the stem '{stem}', so their masks "
+                             f"would be one file ({stem}.png); rename one of them")
+        seen[stem] = name
+        out.append(stem + ".png")
+    return out
+
+
 def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=None, cfg=None, progress=True,
                effects=False, resume=False, restart=False):
     """Write an object mask for every view of the dataset at ``dataset`` into the folder ``out``
@@ -240,6 +254,7 @@ def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=N
     if fitted:
         check_run_dataset(run_dir, dataset)
     ds = load_dataset(dataset, fmt, holdout=0, factor=factor)
+    mask_names(ds.names, dataset)  # before the fit: two views whose masks would be one file are refused
     masks, named = {}, {}
     for key, path in (given or {}).items():
         v = view_index(ds, key)
@@ -264,8 +279,8 @@ def make_masks(dataset, run_dir, out, given=None, box=None, fmt="auto", factor=N
     else:
         result = view_masks(ds.cameras, surf, masks, images=ds.images)
     with staged(out, inputs=inputs, made_by="make_masks") as stage:
-        for name, m in zip(ds.names, result):
-            write_png(os.path.join(stage, os.path.splitext(name)[0] + ".png"), np.where(m, 255, 0).astype(np.uint8))
+        for name, m in zip(mask_names(ds.names, dataset), result):
+            write_png(os.path.join(stage, name), np.where(m, 255, 0).astype(np.uint8))
     summary = {"masks": out, "views": len(result), "object_share": float(np.mean([m.mean() for m in result])),
                "empty_views": int(sum(not m.any() for m in result))}
     if ds.coverage is not None and not effects:

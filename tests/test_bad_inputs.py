@@ -77,6 +77,13 @@ def world(tiny_dataset, tiny_run, tmp_path_factory):
             frames.append(frame)
         meta["frames"] = frames
         json.dump(meta, open(copy / "transforms.json", "w"))
+    same = base / "same_stem"  # two views' images of one stem: view_000.png and view_000.jpg
+    shutil.copytree(tiny_dataset, same)
+    meta = json.load(open(same / "transforms.json"))
+    import imageio.v3 as iio
+    iio.imwrite(same / "images" / "view_000.jpg", iio.imread(same / meta["frames"][1]["file_path"])[..., :3])
+    meta["frames"][1]["file_path"] = "images/view_000.jpg"
+    json.dump(meta, open(same / "transforms.json", "w"))
     for name, breakage in (("no_config", "config"), ("bad_grid", "grid"), ("bad_xml", "xml"), ("nan_grid", "nan"),
                            ("inverted_box", "box"), ("bad_gate", "gate")):
         broken = base / name
@@ -171,6 +178,8 @@ CASES = [
     (R, ["{base}/inverted_box/scene.xml", "--out", "{existing}"], 1,
      "{base}/inverted_box/full_grid.npz: the grid's box needs min < max on every axis"),
     (R, ["{base}/none.xml", "--out", "{existing}"], 1, "{base}/none.xml: no such scene file"),
+    (R, ["{run}/scene.xml", "--cameras", "{base}/same_stem", "--split", "all", "--out", "{existing}"], 1,
+     "{base}/same_stem: two views are both named 'view_000' without their extension"),
     (R, ["{base}/bad_gate/scene.xml", "--out", "{existing}"], 1,
      "{base}/bad_gate/scene.xml: full: sh_gate must be a boolean, got 'yes'"),
     (R, ["{run}/scene.xml", "--out", "{existing}", "--spp", "-4"], 2, "--spp: must be a whole number >= 1"),

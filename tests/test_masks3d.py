@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from test_background import FLOOR_Y, synthetic_object_scene
 
-from mi_voldis.masks3d import box_masks, surface_masks, surfaces, view_masks
+from mi_voldis.masks3d import box_masks, mask_names, surface_masks, surfaces, view_masks
 from mi_voldis.metrics import dilate, iou
 from mi_voldis.scene import build_integrator, integrator_properties
 from mi_voldis.space import SceneSpace
@@ -91,3 +91,12 @@ def test_make_masks_script_writes_masks_train_reads(tiny_dataset, tiny_run, tmp_
     with pytest.raises(SystemExit):
         main([tiny_dataset, "--out", shade, "--effects", "--box", "0,0,0,1,1,1"])
     assert "--effects goes with --from-views" in capsys.readouterr().err
+
+
+def test_mask_files_are_named_by_image_stem_and_two_images_of_one_stem_are_refused():
+    """The loaders match masks to images by stem: each view's mask is <stem>.png, from subfolders too, and
+    a.png beside a.jpg (one mask file for two views) is refused up front, naming both."""
+    assert mask_names(["r_000.png", "cam1/0001.jpg"], "data") == ["r_000.png", "0001.png"]
+    with pytest.raises(ValueError, match="data: images a.png and b/a.jpg share the stem 'a', so their masks would "
+                                         "be one file \\(a.png\\); rename one of them"):
+        mask_names(["a.png", "b/a.jpg"], "data")

@@ -120,7 +120,12 @@ def main(argv=None):
         views = range(len(ds.cameras)) if args.split == "all" else (ds.test if args.split == "test" else ds.train)
         if not len(views):
             raise ValueError(f"{args.cameras}: no {args.split} views to render")
-        cameras = [(os.path.splitext(ds.names[v])[0], ds.cameras[v]) for v in views]
+        cameras = [(os.path.splitext(ds.names[v])[0].replace("/", "_"), ds.cameras[v]) for v in views]
+        names = [n for n, _ in cameras]
+        twice = next((n for k, n in enumerate(names) if n in names[:k]), None)
+        if twice:  # one file for two views: refused before anything is rendered
+            raise ValueError(f"{args.cameras}: two views are both named '{twice}' without their extension, so their "
+                             f"renders ({twice}.exr) would be one file; rename one of the images")
         check_render_size("--width/--height" if size else args.cameras, scene,
                           [(*(size or (c.width, c.height)), args.spp or 1) for _, c in cameras])
     elif not scene.sensors():
