@@ -69,6 +69,13 @@ def test_a_job_records_what_it_left_and_is_replaced_only_while_it_holds_nothing_
                                          "not write, so it is not replaced; move them away"):
         job(out)
     assert files(out) == before and not os.path.exists(out + ".partial") and not os.path.exists(out + ".lock")
+    for name in ("a.txt", "b.txt"):  # past three, the rest is counted, not listed
+        with open(os.path.join(out, name), "w") as f:
+            f.write(name)
+    with pytest.raises(ValueError, match=f"{out}: holds a.txt, b.txt, notes.md and more, which"):
+        job(out)
+    for name in ("a.txt", "b.txt"):
+        os.remove(os.path.join(out, name))
     # the task itself is replaced as its own job; moved away, the rest lets the run be replaced again
     job(os.path.join(out, "removal"), program="optimize", names=("view000.exr",))
     assert read_marker(os.path.join(out, "removal"))["files"] == ["view000.exr"]

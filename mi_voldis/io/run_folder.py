@@ -119,13 +119,13 @@ def foreign(folder, shown=3):
     return found[:shown]
 
 
-def _refuse_foreign(path, verb):
-    extra = foreign(path)
+def _refuse_foreign(path, verb, shown=3):
+    extra = foreign(path, shown + 1)
     if extra:
         program = " or ".join(sorted(str(p) for p in made_by(path)))
-        raise ValueError(f"{path}: holds {', '.join(extra)}, which the {program} job that wrote it did not write, "
-                         f"so it is not {verb}; move {'it' if len(extra) == 1 else 'them'} away or choose another "
-                         "output folder")
+        named = ", ".join(extra[:shown]) + (" and more" if len(extra) > shown else "")
+        raise ValueError(f"{path}: holds {named}, which the {program} job that wrote it did not write, so it is not "
+                         f"{verb}; move {'it' if len(extra) == 1 else 'them'} away or choose another output folder")
 
 
 def _inside(path, folder):
