@@ -13,7 +13,6 @@ beside them (the same input). OUT receives ``metrics.json``.
 """
 import json
 import os
-import sys
 
 import numpy as np
 
@@ -56,20 +55,12 @@ def effect_copy(dataset, effects, names, out):
 
 
 def main(argv=None):
-    args = list(argv or sys.argv[1:])
-    if len(args) < 2:
-        raise SystemExit("usage: python -m mi_voldis.bench.effects RUN OUT")
-    run, out = args[:2]
+    from .strategies import helper_arguments
+    run, out = helper_arguments(argv, "effects")
     from ..data import load_dataset
     from ..fit.config import FitConfig
     from ..inpaint2d import inpainter
-    from ..io.run_folder import claim, write_json
-    if not os.path.isfile(os.path.join(run, "config.json")):
-        raise SystemExit(f"error: {run}: no config.json (not a fitted run)")
-    try:
-        claim(out, "bench_effects")
-    except ValueError as e:
-        raise SystemExit(f"error: {e}") from None
+    from ..io.run_folder import write_json
     from ..metrics import dilate, psnr, score_dilation
     from .strategies import main as refit
     with open(os.path.join(run, "config.json")) as f:

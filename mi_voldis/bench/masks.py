@@ -11,7 +11,6 @@ dataset that reads them (``data/``), and the removal fitted with them
 """
 import json
 import os
-import sys
 
 import numpy as np
 
@@ -43,20 +42,12 @@ def masked_copy(dataset, masks, out):
 
 
 def main(argv=None):
-    args = list(argv or sys.argv[1:])
-    if len(args) < 2:
-        raise SystemExit("usage: python -m mi_voldis.bench.masks RUN OUT")
-    run, out = args[:2]
+    from .strategies import helper_arguments
+    run, out = helper_arguments(argv, "masks")
     from ..data import load_dataset
     from ..fit.config import FitConfig
     from ..io.images import write_png
-    from ..io.run_folder import claim, write_json
-    if not os.path.isfile(os.path.join(run, "config.json")):
-        raise SystemExit(f"error: {run}: no config.json (not a fitted run)")
-    try:
-        claim(out, "bench_masks")
-    except ValueError as e:
-        raise SystemExit(f"error: {e}") from None
+    from ..io.run_folder import write_json
     from ..masks3d import make_masks
     from ..metrics import iou
     from .strategies import main as refit

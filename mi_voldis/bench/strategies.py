@@ -42,6 +42,24 @@ BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views
                        "bg_lr_density", "bg_lr_color", "bg_tv_density", "bg_tv_color")
 
 
+def helper_arguments(argv, name):
+    """RUN and OUT of a bench helper, ``python -m mi_voldis.bench.NAME RUN OUT``: RUN must hold a fit's
+    config.json, and OUT is claimed for ``bench_NAME`` (new, empty or its own: :func:`~mi_voldis.io.run_folder.
+    claim`); anything else stops with one line."""
+    from ..io.run_folder import claim
+    args = list(argv or sys.argv[1:])
+    if len(args) < 2:
+        raise SystemExit(f"usage: python -m mi_voldis.bench.{name} RUN OUT")
+    run, out = args[:2]
+    if not os.path.isfile(os.path.join(run, "config.json")):
+        raise SystemExit(f"error: {run}: no config.json (not a fitted run)")
+    try:
+        claim(out, f"bench_{name}")
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
+    return run, out
+
+
 def out_problem(out, run, dataset):
     """Why OUT may not receive a refit's files (None if it may): it is RUN or the dataset, or inside one
     of them, or it holds a metrics.json no refit wrote (a run's, a user's); a refit's own is replaced."""
