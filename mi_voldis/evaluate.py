@@ -14,7 +14,7 @@ PSNR and SSIM (:mod:`mi_voldis.metrics`) in each; with a ``perceptual`` callable
 """
 import numpy as np
 
-from .metrics import dilate, psnr, ssim
+from .metrics import diagonal_pixels, dilate, psnr, ssim
 from .render.views import render_camera
 
 REGIONS = ("image", "mask", "bbox")
@@ -51,7 +51,7 @@ def score_view(render, truth, mask, dil, perceptual=None):
 def evaluate_removal(integrator, ds, dilation=0.01, perceptual=None):
     """Per-view scores and their means over :func:`scored_views` of the ``bg`` layer of ``integrator``."""
     views = scored_views(ds)
-    dil = int(np.ceil(dilation * np.hypot(*ds.size)))
+    dil = diagonal_pixels(dilation, ds.size)
     rows = {}
     for v in views:
         render = np.clip(render_camera(integrator, ds.cameras[v], ("bg",))["bg"][0], 0, 1)

@@ -7,9 +7,15 @@ import numpy as np
 SCORE_DILATION = 0.03
 
 
+def diagonal_pixels(fraction, size):
+    """``fraction`` of the diagonal of an image of ``size`` ((width, height) or (height, width)), in whole
+    pixels rounded up: how far masks and rings are grown, whatever the resolution."""
+    return int(np.ceil(fraction * np.hypot(*size)))
+
+
 def score_dilation(size):
     """Pixels the masks are dilated by for scoring an image of ``size`` (width, height)."""
-    return int(np.ceil(SCORE_DILATION * np.hypot(*size)))
+    return diagonal_pixels(SCORE_DILATION, size)
 
 
 def psnr(a, b, mask=None):

@@ -246,6 +246,28 @@ def test_a_row_with_the_runs_own_settings_scores_its_background_as_a_refit_would
             assert abs(reused["methods"]["volume"][key] - refit["methods"]["volume"][key]) < 1e-3, (name, key)
 
 
+def test_a_row_scores_the_background_as_the_runs_scene_renders_it_occupancy_grid_and_all(tiny_dataset, tmp_path):
+    """The removal rows score what the run's scene.xml renders, whose occupancy grid skips cells (here
+    every cell: this tiny fit's voxels all lie under opacity 0.1), as the run's own metrics do; the
+    fields marched without the grid would score otherwise."""
+    import json
+
+    from conftest import TINY_FIT
+
+    from mi_voldis.bench.strategies import main as strategies
+    from mi_voldis.fit.config import FitConfig
+    from mi_voldis.fit.run import run_fit
+    run = str(tmp_path / "run")
+    run_fit(tiny_dataset, run, FitConfig.from_sources(None, TINY_FIT + ["occupancy_alpha=0.1"]), progress=False,
+            keep_checkpoints=True)
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["occupied_fraction"] < 1.0
+    own = [r["bg_psnr_mask"] for r in metrics["per_view"]]
+    strategies([run, "guided", str(tmp_path / "reused")])
+    scored = json.loads((tmp_path / "reused" / "metrics.json").read_text())["methods"]["volume"]["psnr_mask"]
+    assert abs(scored - sum(own) / len(own)) < 1e-4
+
+
 def test_a_refit_never_writes_into_its_run_its_dataset_or_a_folder_it_did_not_fill(tiny_run, tiny_dataset, tmp_path):
     """OUT as the run, inside the dataset, or a folder holding someone else's metrics.json: one line naming
     OUT and why, and every file there stays byte for byte."""

@@ -1,7 +1,7 @@
 """Image metrics with analytic answers."""
 import numpy as np
 
-from mi_voldis.metrics import object_residue
+from mi_voldis.metrics import diagonal_pixels, object_residue, score_dilation
 
 
 def test_object_residue_counts_pixels_still_closer_to_the_object():
@@ -19,3 +19,10 @@ def test_object_residue_counts_pixels_still_closer_to_the_object():
     assert object_residue(tinted, photo, background, mask) == 1.0
     same = photo.copy()                                                   # photo = background: says nothing
     assert np.isnan(object_residue(background, same, same, mask))
+
+
+def test_a_fraction_of_the_diagonal_is_whole_pixels_rounded_up_whichever_way_the_size_is_given():
+    assert diagonal_pixels(0.03, (160, 120)) == 6 == diagonal_pixels(0.03, (120, 160))  # 0.03 * 200
+    assert diagonal_pixels(0.031, (160, 120)) == 7  # 6.2 rounds up: a mask is never grown by less
+    assert diagonal_pixels(0.01, (4, 3)) == 1 and diagonal_pixels(0.0, (4, 3)) == 0
+    assert score_dilation((504, 378)) == diagonal_pixels(0.03, (504, 378)) == 19  # 0.03 * 630 = 18.9

@@ -69,6 +69,7 @@ def score_run(run_dir, perceptual=None, dilation=DILATION):
     module docstring's protocol): {"views", "train_views", "dilation_px", "size" ([width, height]),
     "methods": {method: {"views", "mean", "per_view"}}}."""
     from ..evaluate import evaluate_removal, scored_views
+    from ..metrics import diagonal_pixels
     from ..render.views import render_camera
     from ..tasks.base import FittedRun
     fitted = FittedRun(run_dir)
@@ -77,7 +78,7 @@ def score_run(run_dir, perceptual=None, dilation=DILATION):
     if not views:
         raise ValueError(f"{ds.root}: no test view has a ground-truth background and an object mask "
                          "(SPIn-NeRF's images_K/test_label/)")
-    dil = int(np.ceil(dilation * np.hypot(*ds.size)))  # as evaluate_removal turns the fraction into pixels
+    dil = diagonal_pixels(dilation, ds.size)  # as evaluate_removal turns the fraction into pixels
     ours = evaluate_removal(integrator, ds, dilation, perceptual)
     full = {ds.names[v]: np.clip(render_camera(integrator, ds.cameras[v], ("full",))["full"][0], 0, 1)
             for v in views}

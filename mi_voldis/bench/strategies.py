@@ -9,8 +9,9 @@ code changed since RUN was fitted; the benchmark always refits) (the background 
 :data:`BACKGROUND_SETTINGS`, as today's defaults, whatever RUN recorded; every other one as RUN's
 config.json), and
 OUT receives ``metrics.json``, the background of each held-out view as PNG and, where the foreground is
-scored, its coverage against the truth (``viewNNN_coverage.png``: :func:`coverage_errors`). Scored on the held-out
-views against the ground-truth background (in-mask = masks dilated by
+scored, its coverage against the truth (``viewNNN_coverage.png``: :func:`coverage_errors`). Rendered as the run's
+scene.xml renders (its occupancy grid: :func:`~mi_voldis.fit.fields.scene_integrator`) and scored on the
+held-out views against the ground-truth background (in-mask = masks dilated by
 :data:`~mi_voldis.metrics.SCORE_DILATION`, whatever the fit's ``hull_dilation``): PSNR inside
 the masks (and there, apart, where some training view sees the background unmasked and where none
 does: :mod:`mi_voldis.bench.visible`) and outside them (beside the full field's outside them), the
@@ -131,7 +132,7 @@ def evaluate(ds, integrator, hull_min_views=0.9):
                 r[key].append(psnr(by_view[v], gt, part) if part.any() else np.nan)
             r["psnr_outside"].append(psnr(by_view[v], gt, ~region))
             r["residue"].append(object_residue(by_view[v], ds.images[v], gt, ds.masks[v]))
-        rows[name] = {k: float(np.nanmean(x)) if x else None for k, x in r.items()}
+        rows[name] = {k: mean_defined(x) for k, x in r.items()}  # None where no view defines it
         rows[name]["consistency_psnr"] = consistency(ds, tests, by_view, depth, dil)
     full_out = [psnr(np.clip(renders[v]["full"][0], 0, 1), ds.backgrounds[v], ~dilate(ds.masks[v], dil))
                 for v in scored]
@@ -184,7 +185,7 @@ def main(argv=None):
                          "[--set KEY=VALUE ...] [--refit]")
     run, strategy, out = argv[:3]
     from ..data import load_dataset
-    from ..fit.fields import fit_integrator
+    from ..fit.fields import scene_integrator
     from ..fit.state import FitState
     from ..fit.train import fit
     from ..io.images import display_to_uint8, write_png
@@ -225,7 +226,7 @@ def main(argv=None):
         with open(os.path.join(run, "metrics.json")) as f:
             seconds = json.load(f)["seconds"]["phase_bg"]
     os.remove(checkpoint)
-    integrator = fit_integrator(inputs, state)
+    integrator, _ = scene_integrator(inputs, state)  # scored as the run's scene.xml renders it
     if ds.masks is None:  # a capture without masks: scored with the masks the background was fitted with
         ds = fit_ds
     rows, renders = evaluate(ds, integrator, cfg.hull_min_views)

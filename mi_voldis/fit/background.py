@@ -19,7 +19,7 @@ from ..field_state import (
     vertex_positions,
     without_view_dependence,
 )
-from ..metrics import dilate
+from ..metrics import diagonal_pixels, dilate
 from ..render import march
 from .fields import step_voxels
 from .hull import hull_behind_occluders, visual_hull
@@ -188,7 +188,7 @@ def allocate_hidden_surface(inputs, state, depth, stride=2):
     the full field's renders as they were."""
     from .lift import lattice_cells
     ds, cfg, full = inputs.ds, inputs.cfg, state.fields["full"]
-    grow = int(np.ceil(0.01 * np.hypot(*ds.size)))
+    grow = diagonal_pixels(0.01, ds.size)
     points = []
     for v in [v for v in depth if v in set(int(u) for u in ds.masked_train)]:
         hole = dilate(ds.masks[v], grow)
@@ -317,7 +317,7 @@ def hole_shell(inputs, field, candidates, depth):
     pts_scene, real = vertex_positions(field)
     pick = np.flatnonzero(np.array(candidates) & real)
     views = [v for v in depth if v in set(int(u) for u in ds.masked_train)]
-    grow = int(np.ceil(0.01 * np.hypot(*ds.size)))
+    grow = diagonal_pixels(0.01, ds.size)
     front, far, beyond = hidden_surface_side(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
                                              [depth[v] for v in views], [ds.masks[v] for v in views], grow,
                                              cfg.hole_carve_margin, cfg.hole_carve_behind)

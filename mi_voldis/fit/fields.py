@@ -220,3 +220,15 @@ def fit_integrator(inputs, state):
     # the full phase of "refit": an empty stand-in background over the same box
     bg = bg.plugin() if bg is not None else constant_field(1e-12, (0.0, 0.0, 0.0), full.to_world)
     return build_integrator({"full": full.plugin(), "bg": bg}, scene_properties(inputs, state))
+
+
+def scene_integrator(inputs, state):
+    """The integrator a finished fit's ``scene.xml`` describes, so that what is scored is what the run
+    renders: :func:`fit_integrator` with the occupancy grid the scene carries (cells ``occupancy_voxels``
+    voxels across, threshold :func:`occupancy_sigma`; none without ``occupancy_at_step``), whose skipped
+    cells change the render (a faint haze left out). Returns (integrator, occupancy cells or 0)."""
+    integrator = fit_integrator(inputs, state)
+    cells = occupancy_resolution(inputs.cfg, state) if inputs.cfg.occupancy_at_step else 0
+    if cells:
+        integrator.update_occupancy(cells, occupancy_sigma(inputs.cfg, state))
+    return integrator, cells

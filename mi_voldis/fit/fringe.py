@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from ..inpaint2d import inpainter
-from ..metrics import dilate
+from ..metrics import diagonal_pixels, dilate
 
 EPS = 1e-3  # log floor of a channel's value
 NEARER = 0.9  # a pixel nearer than this times the object's median depth stands in front of it (guide.py's rule)
@@ -66,7 +66,7 @@ def find_fringe(ds, width_fraction, contrast, depths=None):
     """The dark fringe (N, H, W) bool of dataset ``ds``'s masked training views (False elsewhere), the
     band ``width_fraction`` of the image diagonal; None when no pixel is found. ``depths``: the full
     field's median depth maps by view (NaN where none), for the views it holds."""
-    width = int(np.ceil(width_fraction * np.hypot(*ds.size)))
+    width = diagonal_pixels(width_fraction, ds.size)
     out = np.zeros(ds.masks.shape, bool)
     fill = inpainter("telea")
     for v in ds.masked_train:

@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..cameras import DevicePoints, device_image
-from ..metrics import dilate
+from ..metrics import diagonal_pixels, dilate
 from .visibility import seen_elsewhere
 
 
@@ -71,7 +71,7 @@ def check_hull(inputs, resolution=48):
     with np.errstate(all="ignore"):  # a contracted box's outer faces lie at infinity
         points = inputs.space.to_world_np(lattice)
     points = points[np.all(np.isfinite(points), axis=1)]
-    dilation = int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size)))
+    dilation = diagonal_pixels(cfg.hull_dilation, ds.size)
     if not visual_hull(points, [ds.cameras[v] for v in views], ds.masks[views], dilation, cfg.hull_min_views).any():
         raise DatasetError(f"{ds.root}: the object's visual hull is empty: no point of the scene box projects inside "
                            f"the object masks of enough of the {len(views)} masked training views that see it "

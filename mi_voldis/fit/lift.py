@@ -23,7 +23,7 @@ from ..cameras import pixel_rays
 from ..device import from_numpy
 from ..field_state import density_raw_for_alpha, resample
 from ..inpaint2d import fill_disparity, inpainter, inpainter_name
-from ..metrics import dilate
+from ..metrics import diagonal_pixels, dilate
 from ..render.surface import median_depth
 from ..render.views import render_camera
 from .fields import fit_integrator
@@ -136,7 +136,7 @@ def object_ray_keys(inputs, field, views, depth, dilation=0.01, reach=0.9, fract
     nothing but the object stands in front of the background, so whatever the full field holds there
     that is not the background's is the object's, wherever the visual hull ends."""
     ds = inputs.ds
-    grow = int(np.ceil(dilation * np.hypot(*ds.size)))
+    grow = diagonal_pixels(dilation, ds.size)
     cams, masks = [ds.cameras[u] for u in ds.masked_train], ds.masks[ds.masked_train]
 
     def objectish(points):
@@ -228,7 +228,7 @@ def lift_prior(inputs, state, allowed, views=4, fill="telea", dilation=0.01, tol
     if not refs:
         return {"reference_views": []}, np.zeros(0, np.int64)
     depth = training_depths(inputs, state, extra=refs)
-    grow = int(np.ceil(dilation * np.hypot(*ds.size)))
+    grow = diagonal_pixels(dilation, ds.size)
     written, holes, seen_share = [np.zeros(0, np.int64)], [], []
     for v in refs:
         region = dilate(ds.masks[v], grow)

@@ -19,7 +19,7 @@ from ..io.run_folder import check_output, dataset_inputs, fingerprint, peak_rss_
 from ..plots import plot_log
 from ..scene import write_scene
 from .config import FitConfig
-from .fields import fit_integrator, occupancy_resolution, occupancy_sigma, sample_step, scene_properties
+from .fields import occupancy_sigma, sample_step, scene_integrator, scene_properties
 from .report import evaluate, write_previews
 from .schedule import backend
 from .train import fit
@@ -88,10 +88,7 @@ def dataset_record(path, dataset, holdout, factor):
 def write_run(stage, inputs, state, fit_seconds):
     """Everything a finished fit writes beside its checkpoint; returns the metrics."""
     ds, cfg = inputs.ds, inputs.cfg
-    integrator = fit_integrator(inputs, state)
-    cells = occupancy_resolution(cfg, state) if cfg.occupancy_at_step else 0
-    if cells:
-        integrator.update_occupancy(cells, occupancy_sigma(cfg, state))
+    integrator, cells = scene_integrator(inputs, state)
     summary, rows, renders = evaluate(ds, integrator)
     props = scene_properties(inputs, state, occupancy_resolution=cells,
                              occupancy_threshold=float(occupancy_sigma(cfg, state)))

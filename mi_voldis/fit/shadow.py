@@ -51,7 +51,7 @@ import numpy as np
 
 from ..cameras import pixel_rays
 from ..io.images import srgb_to_linear
-from ..metrics import dilate
+from ..metrics import diagonal_pixels, dilate
 from .hull import visual_hull
 
 MAP_SIZE = 256  # texels across the shadow map (the object fills it)
@@ -418,7 +418,7 @@ def shadow_of_depths(ds, cfg, depth, views=12):
     if not masked:
         return None, None
     cams, masks, depths = ([seq[v] for v in masked] for seq in (ds.cameras, ds.masks, depth))
-    grow = int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size)))
+    grow = diagonal_pixels(cfg.hull_dilation, ds.size)
     surface = ObjectSurface.of(cams, [ds.images[v] for v in masked], masks, depths)
     # a masked pixel's ray may end on the scene behind the object (a loose mask): inside the visual hull
     # only, the object's own surface stays
@@ -432,5 +432,5 @@ def shadow_of_depths(ds, cfg, depth, views=12):
     if not light.kept:
         return None, light.record()
     shadow = np.zeros(ds.masks.shape, bool)
-    shadow[masked] = shadow_masks(light, occluder, cams, masks, depths, int(np.ceil(GROW * np.hypot(*ds.size))))
+    shadow[masked] = shadow_masks(light, occluder, cams, masks, depths, diagonal_pixels(GROW, ds.size))
     return shadow, light.record()

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..cameras import DevicePoints, device_image, pixel_of, pixel_rays
 from ..inpaint2d import fill_disparity
-from ..metrics import dilate
+from ..metrics import diagonal_pixels, dilate
 
 
 def in_view(points, cameras, depths, masks, tol=0.05):
@@ -79,7 +79,7 @@ def hidden_depth(camera, depth, mask, hole, ring=0.03):
     nothing around the hole has a depth."""
     from .guide import inpainting_hole
     hit = np.isfinite(depth)
-    around = int(np.ceil(ring * np.hypot(*depth.shape)))
+    around = diagonal_pixels(ring, depth.shape)
     hole = inpainting_hole(hole, np.where(hit, depth, 0.0), hit, np.asarray(mask, bool), around)
     known = hit & ~hole
     if not known.any() or not hole.any():

@@ -19,7 +19,7 @@ from ..export import write_layers
 from ..field_state import density_raw_for_alpha, shape_for
 from ..fieldspec import box_transform, field_dict
 from ..io.run_folder import Checkpoint, peak_rss_mib, write_json
-from ..metrics import dilate
+from ..metrics import diagonal_pixels, dilate
 from ..optim.loop import optimize
 from ..plots import plot_log
 from ..raybank import RayBank
@@ -101,7 +101,7 @@ class FittedRun:
         ds = self.dataset
         if ds.masks is None:
             return None
-        near = dilate(ds.masks[ds.train], int(np.ceil(dilation * np.hypot(*ds.size))))
+        near = dilate(ds.masks[ds.train], diagonal_pixels(dilation, ds.size))
         return np.flatnonzero(near.reshape(-1)).astype(np.uint32)
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..cameras import pixel_rays, project
 from ..inpaint2d import available_baselines, inpainter
-from ..metrics import dilate, object_residue, psnr, ssim
+from ..metrics import diagonal_pixels, dilate, object_residue, psnr, ssim
 
 
 def bilinear_taps(h, w, x, y):
@@ -114,7 +114,7 @@ def run(run, output, progress=True):
     if ds.masks is None:
         return output.finish({"task": "removal", "note": "dataset has no object masks: nothing to remove"})
     dilation = output.settings.mask_dilation
-    dil = int(np.ceil(dilation * np.hypot(*ds.size)))
+    dil = diagonal_pixels(dilation, ds.size)
     baselines = available_baselines()
     methods = {"volume": {}, **{name: {} for name in baselines}}
     depth = {}
