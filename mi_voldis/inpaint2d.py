@@ -154,7 +154,7 @@ def blend(fills):
     """The inpainter whose fill is the mean of ``fills``' (inpainters): fills that fail differently (FSR
     and Telea carry what stands under an object up through the hole, the lateral fill flattens stripes
     that do not run along the rows) can err less together; on the removal family the mean of the two
-    won on some scenes and lost on others (reports/notes.md, 2026-11-30)."""
+    won on some scenes and lost on others (reports/notes.md)."""
     def blended(image, hole):
         return (sum(np.asarray(f(image, hole), np.float64) for f in fills) / len(fills)).astype(np.float32)
     return blended

@@ -1,7 +1,7 @@
 """Regularisers of fitting, as analytic gradients added to the optimised grids (no AD pass needed).
 
 On a field's packed values t (n stored values: the lattice's vertices x channels, see
-:mod:`mi_voldis.field_state`; a view lattice's rows after them are no part of it):
+:mod:`mi_voldis.field.state`; a view lattice's rows after them are no part of it):
 
 * total variation, TV(t) = sum_v sum_axis (t[v + e_axis] - t[v])^2 / n, per channel;
 * sparsity, the L1 norm of activated density, sum_v softplus(D_v).
@@ -9,7 +9,7 @@ On a field's packed values t (n stored values: the lattice's vertices x channels
 import drjit as dr
 import mitsuba as mi
 
-from .activations import sigmoid
+from .field.activations import sigmoid
 
 
 def tv_gradient(values, width, neighbours, at=None):

@@ -1,5 +1,5 @@
 """NumPy emulation of the float32 arithmetic a CUDA variant compiles the activations to, for testing
-:mod:`mi_voldis.activations` without a GPU.
+:mod:`mi_voldis.field.activations` without a GPU.
 
 On CUDA, Dr.Jit evaluates ``dr.exp(x)`` as ``ex2.approx.ftz.f32(x * log2(e))`` and ``dr.log(x)`` as
 ``lg2.approx.ftz.f32(x) * ln(2)``. The PTX ISA bounds ``ex2.approx``'s error relative to its result and
@@ -26,7 +26,7 @@ def _flush(y):
 
 
 def approx_ops(bias):
-    """An ``ops`` namespace for :mod:`mi_voldis.activations` whose exp (and log, for comparisons with
+    """An ``ops`` namespace for :mod:`mi_voldis.field.activations` whose exp (and log, for comparisons with
     formulations that use it) err by ``bias`` times the hardware's bound."""
     def exp(x):
         a = f32(f32(x) * np.float32(np.log2(np.e)))

@@ -9,7 +9,7 @@ import mitsuba as mi
 import numpy as np
 
 import mi_voldis  # noqa: F401  (selects the variant, registers the plugins)
-from mi_voldis.fieldspec import box_transform, constant_field, field_dict  # noqa: F401 (re-exported)
+from mi_voldis.field.spec import box_transform, constant_field, field_dict  # noqa: F401 (re-exported)
 
 UNIT_BOX = box_transform([-1, -1, -1], [1, 1, 1])
 

@@ -10,7 +10,7 @@ import mi_voldis  # noqa: F401
 from mi_voldis.cameras import Camera, pixel_of, pixel_rays, project
 from mi_voldis.data.types import Dataset
 from mi_voldis.device import from_numpy
-from mi_voldis.field_state import new_field, vertex_positions
+from mi_voldis.field.state import new_field, vertex_positions
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.lift import lift_pixels, write_surface
 from mi_voldis.fit.visibility import hidden_depth, hidden_surface_side, seen_elsewhere
@@ -69,7 +69,7 @@ def test_harmonic_fill_reproduces_affine_data_and_stays_within_its_boundary():
 
 def test_the_volumetric_harmonic_fill_of_an_empty_region_changes_nothing():
     """A hull no vertex of the grid lies in (a grid kept coarse): the fill returns the values as they are."""
-    from mi_voldis.field_state import neighbour_vertices
+    from mi_voldis.field.state import neighbour_vertices
     from mi_voldis.fit.background import harmonic_fill as fill3d
     field = new_field(np.zeros(3), np.ones(3), 8, 0, -3.0, 1.0, 4)
     values = field.data + dr.arange(mi.Float, dr.width(field.data))
@@ -99,7 +99,7 @@ def test_a_fill_along_the_horizontal_continues_a_floor_and_leaves_the_air_above_
     (-5), a region through both from the floor's bottom up: filled with the vertical weight 0, every
     horizontal slice takes its rim's value, so the floor and the air come back exactly; the isotropic fill
     carries the floor's density upwards into the region's air."""
-    from mi_voldis.field_state import neighbour_vertices
+    from mi_voldis.field.state import neighbour_vertices
     from mi_voldis.fit.background import harmonic_fill as fill3d
     field = new_field(np.zeros(3), np.ones(3), 16, 0, -5.0, 1.0, 4)
     pts, _ = vertex_positions(field)
@@ -124,7 +124,7 @@ def test_a_ceiling_in_the_fill_solves_the_obstacle_problem_exactly_and_changes_n
     density capped at -2 on the middle vertex (x = 7: a veil views see through), the 1D obstacle problem's
     solution is the two straight lines from the ends down to -2 there, and the colour channel, under no
     ceiling, stays 1. A ceiling above every value gives the plain fill bit for bit."""
-    from mi_voldis.field_state import neighbour_vertices
+    from mi_voldis.field.state import neighbour_vertices
     from mi_voldis.fit.background import density_ceiling
     from mi_voldis.fit.background import harmonic_fill as fill3d
     field = new_field(np.zeros(3), np.ones(3), 16, 0, 1.0, 1.0, 4)
@@ -152,7 +152,7 @@ def test_the_filled_colour_comes_from_around_the_hull_not_from_the_vertices_view
     the kept density in as its boundary; the colour fill's boundary is the colour around the hull alone, so
     every filled vertex takes c (the harmonic extension of a constant); the kept vertices keep their own
     values. Filled as the density is (harmonic_fill), the colour carries the tint beside the slab."""
-    from mi_voldis.field_state import neighbour_vertices
+    from mi_voldis.field.state import neighbour_vertices
     from mi_voldis.fit.background import harmonic_fill as fill3d
     from mi_voldis.fit.background import hull_fill
     field = new_field(np.zeros(3), np.ones(3), 12, 0, -3.0, 1.0, 4)
@@ -184,7 +184,7 @@ def test_hull_color_fill_changes_the_starting_backgrounds_colour_alone(tmp_path)
     """The setting reaches the background's start: before any refit step, the background with
     ``hull_color_fill`` has the default's density everywhere and differs in colour only, where it
     fills."""
-    from mi_voldis.field_state import density_of
+    from mi_voldis.field.state import density_of
     starts = {}
     for on in (False, True):
         _, _, _, state = guided_removal(tmp_path / str(on), steps_bg=0, hull_color_fill=on)
@@ -688,7 +688,7 @@ def test_removal_leaves_nothing_of_the_object(strategy, tmp_path):
     """No density of the object survives in the background (nor, in renders, its colour from the haze),
     the background equals the full field away from the masks, and with the lifted prior the renders
     inside the masks show the floor, not the object."""
-    from mi_voldis.field_state import density_of, density_raw_for_alpha
+    from mi_voldis.field.state import density_of, density_raw_for_alpha
     from mi_voldis.fit.fields import fit_integrator
     from mi_voldis.fit.train import fit
     ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
@@ -761,7 +761,7 @@ def test_the_floor_under_the_object_starts_whole_when_the_hull_is_filled_along_t
     guided background's start (no refit step) fills the hull, the floor vertices under the sphere among
     it. Filled along the horizontal (the cameras' up is +y) they take the floor's raw density 4 from the
     floor around the hull; the isotropic fill mixes in the air above and leaves a translucent hole."""
-    from mi_voldis.field_state import density_of
+    from mi_voldis.field.state import density_of
     floors = {}
     for vertical in (0.0, 1.0):
         _, _, _, state = guided_removal(tmp_path / str(vertical), steps_bg=0, hull_fill_vertical=vertical)
@@ -782,7 +782,7 @@ def test_the_fill_finds_the_up_at_the_object_when_its_hull_runs_out_to_the_far_s
     there would tilt the up towards the tail."""
     from types import SimpleNamespace
 
-    from mi_voldis.fieldspec import box_transform
+    from mi_voldis.field.spec import box_transform
     from mi_voldis.fit.background import fill_weights
     rng = np.random.default_rng(0)
     space = SceneSpace("contract", np.eye(4), shell=1.0)
@@ -803,7 +803,7 @@ def test_a_shadow_given_as_effect_masks_leaves_with_the_object_and_the_floor_kee
     the background there is nearer the unshadowed truth than the photos are and than the background
     fitted without them, while no floor vertex under the shadow outside the object's hull changes its
     density: only its colour (brighter)."""
-    from mi_voldis.field_state import density_of, neighbour_vertices
+    from mi_voldis.field.state import density_of, neighbour_vertices
     from mi_voldis.fit.background import background_ray_pool, hull_region
     from mi_voldis.fit.fields import fit_integrator
     errors, shadow = {}, None
@@ -894,7 +894,7 @@ def test_what_views_see_only_through_the_fringe_is_refilled_but_never_thinned(tm
     the foreground, the sample-wise max(w_full - w_bg, 0), would spill onto it; it stays) and thinner
     (1: the outline's thinned floor, which the fill mends). With ``fringe_unseen`` off they start as the
     full field holds them, but for those within ``keep_seen_gap`` of the object's voxels."""
-    from mi_voldis.field_state import density_of, neighbour_vertices
+    from mi_voldis.field.state import density_of, neighbour_vertices
     from mi_voldis.fit.background import (
         background_regions,
         fill_weights,
@@ -958,7 +958,7 @@ def test_what_some_view_sees_keeps_the_full_fields_density_so_the_foreground_is_
     pixels, the way to it not through the sphere), so on the training views away from the masks the
     foreground coverage sum max(w_fg, 0) is nil (above 0.1 on under 1% of those pixels); the harmonic
     fill without it reshapes those vertices and the coverage spills there."""
-    from mi_voldis.field_state import density_of
+    from mi_voldis.field.state import density_of
     from mi_voldis.fit.fields import fit_integrator
     voxel, centre = 2.0 / 39, np.array([0.0, FLOOR_Y + 0.3, 0.0])
     results = {}
@@ -988,7 +988,7 @@ def test_the_haze_views_see_through_leaves_the_background_and_never_thickens(tmp
     half its density on the whole, and no vertex of it denser than the full field holds it. The fill alone
     already leaves it so (the refit's clamp, :func:`~mi_voldis.fit.background.no_denser`, switched off, no
     refit step): a plain harmonic fill would even the alternation out, the -4 vertices denser than before."""
-    from mi_voldis.field_state import density_of
+    from mi_voldis.field.state import density_of
     from mi_voldis.fit.background import background_regions
     voxel, centre, radius = 2.0 / 39, np.array([0.0, FLOOR_Y + 0.3, 0.0]), 0.3
     veils = {}
@@ -1024,7 +1024,7 @@ def test_the_haze_views_see_through_leaves_the_background_and_never_thickens(tmp
 def test_no_denser_caps_the_density_alone_and_only_in_its_region():
     """:func:`~mi_voldis.fit.background.no_denser`: a field and a reference on one lattice; in the region
     the density is the smaller of the two, everywhere else and in every colour channel the field's own."""
-    from mi_voldis.field_state import density_of
+    from mi_voldis.field.state import density_of
     from mi_voldis.fit.background import no_denser
     field = new_field(np.zeros(3), np.ones(3), 8, 0, -3.0, 1.0, 4)
     rng = np.random.default_rng(1)
@@ -1049,7 +1049,7 @@ def test_the_objects_soft_edge_leaves_with_it_though_views_see_it_unmasked(tmp_p
     what views see unmasked beyond the gap (more than 8 voxels from the sphere: the object's voxels
     take in up to 3 voxels in front of it, ``object_front``) keeps the full
     field's density exactly either way."""
-    from mi_voldis.field_state import density_of
+    from mi_voldis.field.state import density_of
     voxel, centre, radius = 2.0 / 39, np.array([0.0, FLOOR_Y + 0.3, 0.0]), 0.3
     kept = {}
     for gap in (0, 4):
@@ -1382,7 +1382,7 @@ def test_the_hole_shows_a_surface_at_the_hidden_floor_even_where_the_fit_kept_no
     and starts the hidden floor opaque from the floor plane the masks' surroundings continue, so the
     held-out views see through the hole an opaque surface at the plane's depth (within two voxels);
     without it the hole stays transparent there."""
-    from mi_voldis.field_state import resample
+    from mi_voldis.field.state import resample
     from mi_voldis.fit.fields import fit_integrator
     from mi_voldis.fit.train import fit
     from mi_voldis.render.surface import median_depth

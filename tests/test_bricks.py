@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from helpers import UNIT_BOX, axis_rays, check_gradient, field_dict, integrator
 
-from mi_voldis import bricks, field_state, grid
-from mi_voldis.fieldspec import brick_field_dict
+from mi_voldis.field import bricks, grid
+from mi_voldis.field import state as field_state
+from mi_voldis.field.spec import brick_field_dict
 from mi_voldis.render.rays import render_rays
 
 

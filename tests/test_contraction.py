@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from helpers import check_gradient, constant_field, random_field
 
-from mi_voldis.fieldspec import box_transform, field_dict
+from mi_voldis.field.spec import box_transform, field_dict
 from mi_voldis.render import march
 from mi_voldis.render.rays import render_rays
 from mi_voldis.space import SceneSpace

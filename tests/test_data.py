@@ -147,7 +147,7 @@ def test_ndc_space_maps_rays_to_lines():
 def test_forward_facing_render_in_ndc_is_analytic():
     """A homogeneous NDC slab z' in [-0.2, 0.4] of density sigma: alpha = 1 - exp(-sigma L') with L'
     the NDC length of the ray inside it (both fields fill the slab, so the samples cover it exactly)."""
-    from mi_voldis.fieldspec import box_transform, constant_field
+    from mi_voldis.field.spec import box_transform, constant_field
     from mi_voldis.render.rays import render_rays
     cams = [Camera(look_at([0.1 * k, 0.0, -3.0], [0.0, 0.0, 0.0]), 50.0, 24, 18) for k in range(3)]
     from mi_voldis.data.scene_box import average_pose

@@ -9,8 +9,8 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from mi_voldis.dense_export import export_dense, sample_field, stretch, write_export
-from mi_voldis.fieldspec import box_transform, brick_field_dict, field_dict
+from mi_voldis.field.dense_export import export_dense, sample_field, stretch, write_export
+from mi_voldis.field.spec import box_transform, brick_field_dict, field_dict
 from mi_voldis.io.vol import read_header, read_vol
 from mi_voldis.scene import write_scene
 from mi_voldis.space import SceneSpace

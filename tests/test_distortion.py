@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from helpers import axis_rays, check_gradient, constant_field, integrator, random_field
 
-from mi_voldis.fieldspec import box_transform
+from mi_voldis.field.spec import box_transform
 from mi_voldis.render.rays import render_rays
 
 

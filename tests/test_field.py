@@ -8,7 +8,7 @@ import pytest
 from helpers import box_transform, field_dict
 
 import mi_voldis
-from mi_voldis.activations import sigmoid, softplus
+from mi_voldis.field.activations import sigmoid, softplus
 
 
 def load(density, color, to_world=None):
@@ -206,7 +206,7 @@ def test_scripts_with_cuda_variant_and_no_device_say_so_in_one_line(script, tmp_
 
 
 def test_pack_interleaves_channels_and_its_adjoint_gathers_them_back():
-    from mi_voldis import grid
+    from mi_voldis.field import grid
     rng = np.random.default_rng(3)
     d = rng.normal(size=(2, 3, 4, 1)).astype(np.float32)
     c = rng.normal(size=(2, 3, 4, 12)).astype(np.float32)  # 13 channels: packet width 16, 3 padding

@@ -92,8 +92,8 @@ def test_the_mitsuba_command_renders_the_vol_export(exported, tmp_path):
 def test_a_scene_without_sensors_exports_with_a_view_of_the_whole_region(tmp_path):
     """A source scene with no camera (one written from Python): the export gets a camera that sees the
     region, and renders with something in view."""
-    from mi_voldis.dense_export import source_sensor, write_export
-    from mi_voldis.fieldspec import box_transform, field_dict
+    from mi_voldis.field.dense_export import source_sensor, write_export
+    from mi_voldis.field.spec import box_transform, field_dict
     from mi_voldis.scene import write_scene
     lo, hi = np.array([-1.0, -0.5, 0.0]), np.array([1.0, 0.5, 2.0])
     field = mi.load_dict(field_dict(np.full((3, 3, 3, 1), 2.0), np.zeros((3, 3, 3, 3)), box_transform(lo, hi)))

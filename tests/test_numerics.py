@@ -7,8 +7,8 @@ import pytest
 from cuda_emulation import approx_ops, f32
 from helpers import UNIT_BOX, field_dict, integrator, numpy_layers, random_field
 
-from mi_voldis import activations
-from mi_voldis.activations import inverse_softplus, one_minus_exp, sigmoid, softplus
+from mi_voldis.field import activations
+from mi_voldis.field.activations import inverse_softplus, one_minus_exp, sigmoid, softplus
 from mi_voldis.render import quadrature
 from mi_voldis.render.rays import render_rays
 

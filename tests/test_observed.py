@@ -4,7 +4,7 @@ import mitsuba as mi
 import numpy as np
 
 from mi_voldis.cameras import Camera, look_at
-from mi_voldis.field_state import new_field
+from mi_voldis.field.state import new_field
 from mi_voldis.fit.observed import brick_centres, brick_views, view_rate_scale
 from mi_voldis.optim.adam import Adam
 from mi_voldis.space import SceneSpace

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from helpers import UNIT_BOX, axis_rays, box_transform, constant_field, integrator, numpy_layers, ortho_scene
 
-from mi_voldis.activations import one_minus_exp, sigmoid, softplus
+from mi_voldis.field.activations import one_minus_exp, sigmoid, softplus
 from mi_voldis.render.rays import render_rays
 
 COLOR = np.array([0.8, 0.3, 0.1])

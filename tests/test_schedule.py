@@ -99,7 +99,7 @@ def test_a_stage_stops_short_of_the_memory_bound_on_its_counted_vertices():
     (the count equals what resampling allocates); the current resolution where none fits."""
     from types import SimpleNamespace
 
-    from mi_voldis.field_state import new_field, resample, resampled_vertices, shape_for
+    from mi_voldis.field.state import new_field, resample, resampled_vertices, shape_for
     from mi_voldis.fit.fields import fitting_resolution
     lo, hi = np.zeros(3), np.array([1.0, 0.5, 1.0])
     field = new_field(lo, hi, 40, 0, -3.0, 1.0, 8)
@@ -229,7 +229,7 @@ def test_a_fit_whose_carved_grid_would_outgrow_the_memory_stays_on_the_grid_it_h
                                                                                       monkeypatch):
     """With no memory for a single vertex more, every later stage is capped at the coarse grid: the run
     ends on it and its plan records each cap as [step, planned, used]."""
-    from mi_voldis.field_state import shape_for
+    from mi_voldis.field.state import shape_for
     from mi_voldis.fit import fields
     from mi_voldis.fit.run import run_fit
     monkeypatch.setattr(fields, "affordable_vertices", lambda *a: 1.0)

@@ -11,7 +11,7 @@ from helpers import field_dict
 from test_data import write_transforms
 
 from mi_voldis.cameras import Camera, look_at
-from mi_voldis.fieldspec import box_transform
+from mi_voldis.field.spec import box_transform
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.run import run_fit
 

@@ -7,7 +7,7 @@ import pytest
 import mi_voldis  # noqa: F401
 from mi_voldis.cameras import Camera, pixel_rays
 from mi_voldis.device import from_numpy
-from mi_voldis.field_state import new_field, vertex_positions
+from mi_voldis.field.state import new_field, vertex_positions
 from mi_voldis.render.surface import front_weight, median_depth
 from mi_voldis.scene import build_integrator, integrator_properties
 from mi_voldis.space import SceneSpace

@@ -105,7 +105,7 @@ def test_nonneg_residual_only_adds_light(tiny_run):
     assert falling(json.load(open(os.path.join(out, "log.json"))))
     scene = mi.load_file(os.path.join(out, "scene.xml"))
     res = scene.integrator().fields["residual"]
-    import mi_voldis.activations as act
+    import mi_voldis.field.activations as act
     colour = np.array(act.sigmoid(mi.Float(np.array(res.color).ravel())))
     assert colour.min() >= 0.0  # sigmoid colours and softplus densities: non-negative by construction
     run = FittedRun(tiny_run)

@@ -117,8 +117,8 @@ def test_brick_reference_matches_drjit_bricks(keep):
     """TorchBrickField against the radiance_field plugin's brick grid, same bricks (every one, or a
     subset, so that lookups blend with the empty brick): renders and gradients of the packed data."""
     from mi_voldis.bench.torch_reference import TorchBrickField
-    from mi_voldis.bricks import counts
-    from mi_voldis.fieldspec import brick_field_dict
+    from mi_voldis.field.bricks import counts
+    from mi_voldis.field.spec import brick_field_dict
     rng = np.random.default_rng(11)
     shape = (10, 9, 11)  # (Z, Y, X) vertices: 2 x 2 x 2 bricks of 8, partly filled
     density, color = rng.normal(0.5, 1, shape + (1,)), rng.normal(0, 1, shape + (3,))

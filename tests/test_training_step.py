@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from helpers import field_dict
 
-from mi_voldis import bricks, field_state, grid
-from mi_voldis.fieldspec import brick_field_dict
+from mi_voldis.field import bricks, grid
+from mi_voldis.field import state as field_state
+from mi_voldis.field.spec import brick_field_dict
 from mi_voldis.fit.config import FitConfig
 from mi_voldis.fit.problem import FieldFit
 from mi_voldis.optim.adam import Adam

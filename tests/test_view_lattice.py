@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from helpers import UNIT_BOX, integrator
 
-from mi_voldis import bricks, field_state
-from mi_voldis.fieldspec import brick_field_dict
+from mi_voldis.field import bricks
+from mi_voldis.field import state as field_state
+from mi_voldis.field.spec import brick_field_dict
 from mi_voldis.plugins.radiance_field import SH_Y0
 from mi_voldis.render.rays import render_rays
 

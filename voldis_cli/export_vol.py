@@ -6,7 +6,7 @@
 Writes DIR/<field>_sigma_t.vol (density per world unit), DIR/<field>_albedo.vol (the view-independent
 colour) and DIR/<field>_gridvolume.xml (a cube holding a heterogeneous medium over them, volpath, a
 constant environment and the scene's first camera, a complete scene for `mitsuba` or mi.render; see
-mi_voldis/dense_export.py for how contracted and NDC densities are converted). Default region: the
+mi_voldis/field/dense_export.py for how contracted and NDC densities are converted). Default region: the
 field's box (world space) or the inner cube of a contracted space; NDC scenes need --region. Default
 resolution: 128 values along the region's longest side, the others in proportion. DIR is written
 whole (DIR.partial, then swapped in) and replaces an earlier export; it may not be, hold or lie inside
@@ -67,7 +67,7 @@ SLAB_BYTES = 256
 def check_export_size(resolution):
     """Refuse an export that cannot fit before sampling (:mod:`mi_voldis.io.limits`); a slab holds at
     least one z-plane of points, each coordinate one Dr.Jit array."""
-    from mi_voldis.dense_export import SLAB_VERTICES
+    from mi_voldis.field.dense_export import SLAB_VERTICES
     from mi_voldis.io.limits import check_entries, check_memory
     nx, ny, nz = resolution
     what = f"--resolution: a {nx}x{ny}x{nz} export"
@@ -90,7 +90,7 @@ def main(argv=None):
     os.environ["MI_VOLDIS_VARIANT"] = args.variant  # chosen before the first import of mi_voldis
     import numpy as np
 
-    from mi_voldis.dense_export import export_dense, source_sensor, write_export
+    from mi_voldis.field.dense_export import export_dense, source_sensor, write_export
     from mi_voldis.io.run_folder import check_output, scene_files, staged
     from mi_voldis.scene import load_scene
 

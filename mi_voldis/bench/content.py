@@ -12,9 +12,9 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..activations import inverse_softplus
 from ..device import from_numpy
-from ..fieldspec import box_transform, field_dict
+from ..field.activations import inverse_softplus
+from ..field.spec import box_transform, field_dict
 from ..render.march import prepare_rays, sample_count
 from ..render.rays import render_rays
 

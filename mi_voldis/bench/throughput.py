@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..device import from_numpy
-from ..fieldspec import box_transform, brick_field_dict, field_dict
+from ..field.spec import box_transform, brick_field_dict, field_dict
 from ..optim.adam import Adam
 from ..optim.parameters import PackedParameters
 from ..render import march

@@ -7,7 +7,7 @@ Dr.Jit renderer's ``full`` layer:
 - raw grid of shape (1, 4, Z, Y, X) (channel 0 density, 1-3 RGB) over the box [lo, hi]; vertex
   (i, j, k) sits at lo + (i / (X-1), j / (Y-1), k / (Z-1)) (hi - lo) (``align_corners=True``); or the
   same lattice in bricks (:class:`TorchBrickField`: a brick table and the allocated bricks' vertex
-  rows, :mod:`mi_voldis.bricks`), read corner by corner with index gathers;
+  rows, :mod:`mi_voldis.field.bricks`), read corner by corner with index gathers;
 - after trilinear interpolation, sigma = density_scale * softplus(raw_0) inside the box, 0 outside,
   and c = sigmoid(raw_1..3);
 - a ray o + t d (d unit) samples its box interval [t0, t1] (clipped to t >= 0) at
@@ -44,7 +44,7 @@ class TorchGridField:
 
 
 class TorchBrickField:
-    """A brick grid (:mod:`mi_voldis.bricks`): ``table`` (bz, by, bx) int64 slots, ``data`` (slots * B^3,
+    """A brick grid (:mod:`mi_voldis.field.bricks`): ``table`` (bz, by, bx) int64 slots, ``data`` (slots * B^3,
     4) raw values (the empty brick first), ``shape`` (X, Y, Z) vertices, over the box [lo, hi]."""
 
     def __init__(self, table, data, shape, brick, lo, hi, density_scale=1.0):
@@ -56,7 +56,7 @@ class TorchBrickField:
     @classmethod
     def from_numpy(cls, density, color, lo, hi, density_scale=1.0, brick=8, keep=None):
         """Field from raw grids in Mitsuba's layout (as :meth:`TorchGridField.from_numpy`) in bricks."""
-        from ..bricks import from_dense
+        from ..field.bricks import from_dense
         density = np.asarray(density, np.float32).reshape(np.shape(color)[:3] + (1,))
         values = np.concatenate([density, np.asarray(color, np.float32)], axis=-1)
         layout, data = from_dense(values, brick, keep, width=4)

@@ -7,10 +7,10 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..bricks import EMPTY_COLOR, EMPTY_DENSITY
 from ..cameras import pixel_rays, world_up
 from ..device import from_numpy
-from ..field_state import (
+from ..field.bricks import EMPTY_COLOR, EMPTY_DENSITY
+from ..field.state import (
     MEAN_CHANNELS,
     density_raw_for_alpha,
     dilate_vertices,

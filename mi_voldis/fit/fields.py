@@ -9,8 +9,8 @@ import numpy as np
 
 from ..data.scene_box import fitting_box
 from ..data.types import Dataset
-from ..field_state import carve, density_raw_for_alpha, new_field, resample, resampled_vertices, shape_for, voxel_size
-from ..fieldspec import constant_field
+from ..field.spec import constant_field
+from ..field.state import carve, density_raw_for_alpha, new_field, resample, resampled_vertices, shape_for, voxel_size
 from ..raybank import RayBank
 from ..render import march
 from ..scene import build_integrator, integrator_properties

@@ -18,10 +18,10 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..activations import logit
 from ..cameras import pixel_rays
 from ..device import from_numpy
-from ..field_state import density_raw_for_alpha, resample
+from ..field.activations import logit
+from ..field.state import density_raw_for_alpha, resample
 from ..inpaint2d import fill_disparity, inpainter, inpainter_name
 from ..metrics import diagonal_pixels, dilate
 from ..render.surface import median_depth

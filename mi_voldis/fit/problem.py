@@ -9,7 +9,7 @@ import numpy as np
 from .. import exposure
 from ..data.scene_box import rig_extent
 from ..device import from_numpy
-from ..field_state import MEAN_CHANNELS, neighbour_vertices
+from ..field.state import MEAN_CHANNELS, neighbour_vertices
 from ..losses import background_loss, depth_smoothness_loss, distortion_loss, full_loss
 from ..optim.parameters import PackedParameters
 from ..raybank import tile_pairs
@@ -115,7 +115,7 @@ class FieldFit:
         and the mean colour of the vertices where ``hull`` is not 0, but the empty brick's (slot 0, which
         stands for every unallocated brick). Elsewhere the masked gradient is zero, so Adam would never move
         them; the view-dependent coefficients stay as the background's start left them (0 where it
-        inpaints the hole: :func:`~mi_voldis.field_state.without_view_dependence`). Empty where the hull is."""
+        inpaints the hole: :func:`~mi_voldis.field.state.without_view_dependence`). Empty where the hull is."""
         inside = (self.hull != 0.0) & (dr.arange(mi.UInt32, dr.width(self.hull)) >= field.layout.vertices_per_brick)
         vertices = dr.compress(inside)
         if dr.width(vertices) == 0:

@@ -226,7 +226,7 @@ def stages(cfg, coarse, final):
     return list(zip(starts, levels))
 
 
-# A fit's peak memory (reports/notes.md, 2026-11-27): a base that grows with the training pixels (the photos,
+# A fit's peak memory (measured in reports/notes.md): a base that grows with the training pixels (the photos,
 # the ray bank: about 400 MiB and 30 bytes a pixel, fern 0.3 and garden 1.5 GiB before any grid) and a share per
 # stored vertex of the fitted fields at colour degree 0: the values, their Adam moments and gradient and the three
 # arrays Adam's kernel writes beside them, the TV's neighbour table (24 bytes), and what Dr.Jit's allocator keeps
@@ -255,7 +255,7 @@ def memory_scale(sh_degree, grey=False, view=False):
     Measured on
     fern: 7.0 GiB of peak RSS at degree 1 and 336^3 against 1.7 GiB at degree 0 and 304^3, 3.3 times as much
     per vertex (reports/notes.md)."""
-    from ..grid import packet_width
+    from ..field.grid import packet_width
     from ..plugins.radiance_field import color_channels
     degree = 0 if sh_degree == "auto" else int(sh_degree)
     if degree == 1 and grey and view:
@@ -265,10 +265,10 @@ def memory_scale(sh_degree, grey=False, view=False):
 
 # A training step's kernels with a 64^3 view lattice over the same step without one, as fits run it: the
 # seconds a sample after the onset over those before, each fit alone on the machine, 1.095 (family13) and 1.051
-# (family14) (reports/notes.md, 2026-11-29). The larger, rounded up: a plan that overestimates a step ends early
+# (family14) (reports/notes.md). The larger, rounded up: a plan that overestimates a step ends early
 # rather than late. The benchmark's random fields (every brick allocated, every sample in one) give more, 1.29 at
 # 128^3 and 1.14 at 256^3; at 1.3 the plans of fern, horns and the statue, whose observation and memory bounds
-# tie, turned to half-voxel steps at twice the samples a ray (reports/notes.md, twenty-sixth session).
+# tie, turned to half-voxel steps at twice the samples a ray (reports/notes.md).
 VIEW_STEP_COST = 1.1
 
 

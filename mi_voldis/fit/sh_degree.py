@@ -1,7 +1,7 @@
 """Spherical-harmonic degree chosen by the scene: degree 1 only where view dependence pays."""
 import numpy as np
 
-from ..field_state import with_sh_degree
+from ..field.state import with_sh_degree
 from ..metrics import psnr
 from ..optim.adam import Adam
 from ..optim.loop import optimize

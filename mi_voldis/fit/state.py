@@ -5,9 +5,9 @@ from dataclasses import dataclass, field
 import mitsuba as mi
 import numpy as np
 
-from ..bricks import Layout
 from ..device import from_numpy
-from ..field_state import FieldState
+from ..field.bricks import Layout
+from ..field.state import FieldState
 from ..io.run_folder import Checkpoint
 from ..optim.adam import Adam
 from ..render.occupancy import Occupancy

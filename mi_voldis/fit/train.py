@@ -48,7 +48,7 @@ import numpy as np
 
 from .. import exposure
 from ..data import check_rig
-from ..field_state import neighbour_vertices
+from ..field.state import neighbour_vertices
 from ..inpaint2d import fallback_note
 from ..inpaint2d import inpainter as get_inpainter
 from ..metrics import psnr

@@ -38,7 +38,7 @@ def save_field(directory, stem, density, color, to_world, density_scale=1.0, sh_
 
 
 def save_grid(directory, stem, layout, values, to_world, density_scale=1.0, sh_gate=False, view=None):
-    """Write ``<stem>_grid.npz``, a brick grid (:mod:`mi_voldis.bricks`: its ``table``, the allocated
+    """Write ``<stem>_grid.npz``, a brick grid (:mod:`mi_voldis.field.bricks`: its ``table``, the allocated
     bricks' raw ``values`` (bricks * B^3, channels), ``vertices``, the box as ``bbox`` and the view
     lattice ``view`` (Z, Y, X, 3) where given), and return the ``<medium>`` XML body for it. Written to a
     temporary file and renamed."""

@@ -5,7 +5,7 @@
 
 The state (m, v, t) is plain arrays so that checkpoints can store and restore it exactly. Parameters
 are tensors or flat arrays; a learning rate is a number, or a list of rates applied periodically
-along the flat array (one per channel of an interleaved grid, see :mod:`mi_voldis.grid`).
+along the flat array (one per channel of an interleaved grid, see :mod:`mi_voldis.field.grid`).
 ``warmup``: the learning rate ramps up linearly over this many steps after a (re)start, so that the
 first, sign-like Adam steps after a grid is resampled do not jolt it. ``scales[key]``, where set: a Float
 as wide as the parameter that multiplies its step element by element (learning rates per vertex:

@@ -7,8 +7,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .. import bricks, grid
-from ..activations import one_minus_exp, sigmoid, softplus
+from ..field import bricks, grid
+from ..field.activations import one_minus_exp, sigmoid, softplus
 from ..io.vol import grid_values, read_header, read_vol
 from ..transforms import to_matrix
 
@@ -64,7 +64,7 @@ class RadianceField(mi.Medium):
 
      * - grid
        - |string|
-       - Instead of ``density`` and ``color``: a sparse brick grid (:mod:`mi_voldis.bricks`), a
+       - Instead of ``density`` and ``color``: a sparse brick grid (:mod:`mi_voldis.field.bricks`), a
          ``.npz`` file with ``table`` (bz, by, bx) brick slots, ``data`` (allocated bricks, B^3
          vertices, 1 + colour channels) raw values, ``vertices`` (X, Y, Z) and ``bbox`` (the box, as
          a ``.vol`` header has it). In memory: the tensors ``table`` and ``data`` and the vector
@@ -240,7 +240,7 @@ class RadianceField(mi.Medium):
 
     @property
     def packed(self):
-        """Density and colour interleaved per vertex (:func:`mi_voldis.grid.pack`; for a brick grid its
+        """Density and colour interleaved per vertex (:func:`mi_voldis.field.grid.pack`; for a brick grid its
         data, empty brick first): what lookups read."""
         if self._packed is None:
             with dr.resume_grad():  # first read may happen where gradients are suspended (mi.render's primal)
@@ -266,7 +266,7 @@ class RadianceField(mi.Medium):
     def _unpack(self):
         if self.layout is not None:
             raise ValueError("radiance_field: a brick grid has no dense density and color tensors (see "
-                             "mi_voldis.bricks.to_dense)")
+                             "mi_voldis.field.bricks.to_dense)")
         if self._density is None:
             self._density, self._color = grid.unpack(self._packed, [1, self.channels - 1],
                                                      self.shape[::-1])

@@ -55,7 +55,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..grid import packet_width
+from ..field.grid import packet_width
 from ..transforms import apply_point, apply_vector
 from . import mixing, quadrature
 from .intervals import sample_interval

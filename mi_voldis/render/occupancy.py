@@ -11,8 +11,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..activations import inverse_softplus
-from ..grid import dilate_cells
+from ..field.activations import inverse_softplus
+from ..field.grid import dilate_cells
 from ..transforms import apply_point
 
 

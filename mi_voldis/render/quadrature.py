@@ -8,10 +8,10 @@ For samples i with density sigma_i and interval length delta_i:
 
 Keeping the optical depth sum_{j<i} sigma_j delta_j instead of the product of transmittances avoids
 underflow chains, alpha uses a cancellation-free 1 - exp(-x) and T an exp accurate for every argument
-(:mod:`mi_voldis.activations`, on CUDA's approximate exp too), so densities from 1e-8 to 1e8 give alpha
-in [0, 1] with full relative precision. ``ops``: as in :mod:`mi_voldis.activations`.
+(:mod:`mi_voldis.field.activations`, on CUDA's approximate exp too), so densities from 1e-8 to 1e8 give alpha
+in [0, 1] with full relative precision. ``ops``: as in :mod:`mi_voldis.field.activations`.
 """
-from ..activations import DRJIT, exp, one_minus_exp
+from ..field.activations import DRJIT, exp, one_minus_exp
 
 # Rays stop once every field's transmittance is below exp(-OPTICAL_DEPTH_CUTOFF) = 1e-4: what is left
 # can change a pixel by at most 1e-4 (times its colour).

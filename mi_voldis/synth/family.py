@@ -7,7 +7,7 @@ either half. The split is fixed here, before any result: the first ten scenes tu
 on them alone), the rest check (``reports/removal.md`` leads with their worst scene). The seeds
 start far from the ones the earlier random scenes (``random0`` ... ``random4``) were chosen on. Scenes
 20 to 23 joined the check half after a candidate chosen on the tuning half failed the first ten
-(reports/notes.md, 2026-11-30), to judge the next one on scenes no choice had looked at.
+(reports/notes.md), to judge the next one on scenes no choice had looked at.
 """
 FIRST_SEED = 1000
 SIZE = 24

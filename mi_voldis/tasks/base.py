@@ -16,8 +16,8 @@ import numpy as np
 from ..data import DatasetError, load_dataset
 from ..device import from_numpy
 from ..export import write_layers
-from ..field_state import density_raw_for_alpha, shape_for
-from ..fieldspec import box_transform, field_dict
+from ..field.spec import box_transform, field_dict
+from ..field.state import density_raw_for_alpha, shape_for
 from ..io.run_folder import Checkpoint, peak_rss_mib, write_json
 from ..metrics import diagonal_pixels, dilate
 from ..optim.loop import optimize

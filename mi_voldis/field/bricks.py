@@ -1,12 +1,12 @@
 """Sparse brick grids: a vertex lattice stored only where the scene needs it.
 
-A lattice of X x Y x Z vertices spans the unit cube as a dense grid does (:mod:`mi_voldis.grid`: vertex
+A lattice of X x Y x Z vertices spans the unit cube as a dense grid does (:mod:`mi_voldis.field.grid`: vertex
 (i, j, k) at (i / (X-1), j / (Y-1), k / (Z-1))), cut into bricks of B^3 vertices (B a power of two).
 A *table* with one entry per brick gives the brick's *slot* in the data array; slot 0 is the empty
 brick, shared by every brick that holds nothing: its vertices have raw density ``EMPTY_DENSITY`` and
 raw colour ``EMPTY_COLOR`` (no density, black). The data array holds B^3 vertices per slot (x fastest
 within a brick), each as ``width`` floats: the field's channels interleaved and padded to a power of
-two, as :func:`mi_voldis.grid.pack` lays out a dense grid, so that a corner is one packet gather.
+two, as :func:`mi_voldis.field.grid.pack` lays out a dense grid, so that a corner is one packet gather.
 
 Trilinear interpolation reads each of the 8 corners through the table; where some corners lie in the
 empty brick, it blends towards empty values. Fitting keeps allocated bricks one brick away from any
@@ -20,7 +20,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from .device import from_numpy
+from ..device import from_numpy
 from .grid import dilate_cells, packet_width
 
 EMPTY_DENSITY = -20.0  # raw density of the empty brick: softplus(-20) = 2e-9
@@ -121,7 +121,7 @@ def counts(shape, brick):
 def trilinear(data, layout, width, channels, p, active=True):
     """Trilinear interpolation of a brick grid at local points ``p`` in [0, 1]^3 (clamped to the cube;
     callers mask points outside). ``data``: the packed vertex values; returns ``channels`` Floats.
-    The same interpolant as :func:`mi_voldis.grid.trilinear` of the dense grid it stores."""
+    The same interpolant as :func:`mi_voldis.field.grid.trilinear` of the dense grid it stores."""
     sx, sy, sz = layout.shape
     x = dr.clip(p, 0.0, 1.0) * mi.Vector3f(sx - 1, sy - 1, sz - 1)
     i = dr.minimum(mi.Vector3u(mi.Vector3i(x)), mi.Vector3u(sx - 2, sy - 2, sz - 2))

@@ -2,9 +2,9 @@
 import mitsuba as mi
 import numpy as np
 
+from ..transforms import to_scalar_transform
 from . import bricks
 from .activations import inverse_softplus, logit
-from .transforms import to_scalar_transform
 
 
 def box_transform(lo, hi):
@@ -28,7 +28,7 @@ def field_dict(density, color, to_world=None, density_scale=1.0):
 
 
 def brick_field_dict(density, color, to_world=None, density_scale=1.0, brick=8, keep=None):
-    """Plugin dict of the same field stored as a brick grid (:mod:`mi_voldis.bricks`); ``keep``: the
+    """Plugin dict of the same field stored as a brick grid (:mod:`mi_voldis.field.bricks`); ``keep``: the
     bricks to allocate (default: all)."""
     density = np.asarray(density, np.float32)
     values = np.concatenate([density.reshape(density.shape[:3] + (1,)), np.asarray(color, np.float32)], -1)

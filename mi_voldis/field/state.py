@@ -1,7 +1,7 @@
-"""The values of a field while it is fitted: a brick grid (:mod:`mi_voldis.bricks`) over an axis-aligned
+"""The values of a field while it is fitted: a brick grid (:mod:`mi_voldis.field.bricks`) over an axis-aligned
 box of scene space, made, carved, resampled onto finer lattices and re-degreed.
 
-A :class:`FieldState` holds the lattice's :class:`~mi_voldis.bricks.Layout` and the packed vertex data
+A :class:`FieldState` holds the lattice's :class:`~mi_voldis.field.bricks.Layout` and the packed vertex data
 (density and colour coefficients interleaved per vertex, the empty brick first; then, for grey view
 dependence on a lattice of its own, that lattice's vertices: ``radiance_field``'s ``view``) as one Dr.Jit
 array: the very array the ``radiance_field`` plugin reads and Adam steps on. Resampling evaluates the
@@ -16,14 +16,14 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..device import from_numpy
+from ..plugins.radiance_field import COLOR_LAYOUTS, color_channels
+from ..transforms import to_scalar_transform
 from . import bricks
 from .activations import inverse_softplus
 from .bricks import MEAN_CHANNELS
-from .device import from_numpy
-from .fieldspec import box_transform
 from .grid import packet_width
-from .plugins.radiance_field import COLOR_LAYOUTS, color_channels
-from .transforms import to_scalar_transform
+from .spec import box_transform
 
 BRICK = 8  # vertices along a brick's edge
 

@@ -21,10 +21,10 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..io.scene_xml import sensor_xml
+from ..io.vol import write_vol
+from ..transforms import apply_point
 from .activations import sigmoid, softplus
-from .io.scene_xml import sensor_xml
-from .io.vol import write_vol
-from .transforms import apply_point
 
 
 def stretch(space, x, h=1e-4):
@@ -84,7 +84,7 @@ def export_dense(field, space, lo, hi, resolution, slab_vertices=SLAB_VERTICES):
 
 
 SCENE = """<scene version="3.0.0">
-    <!-- {role} field of {source}, resampled by mi_voldis.dense_export: sigma_t per world unit,
+    <!-- {role} field of {source}, resampled by mi_voldis.field.dense_export: sigma_t per world unit,
          albedo = the view-independent colour. A radiance field emits rather than scatters: this
          medium is an approximation for Mitsuba's own volumetric path tracers. A complete scene:
          `mitsuba {role}_gridvolume.xml` or mi.render(mi.load_file(...)) renders the sensor below
