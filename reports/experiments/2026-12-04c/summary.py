@@ -6,8 +6,6 @@ occupied share of the occupancy grid, peak RSS and fit seconds (from each run's 
 import json
 import sys
 
-import numpy as np
-
 if len(sys.argv) < 2:
     sys.exit("usage: summary.py RUN ...")
 for r in sys.argv[1:]:
@@ -19,5 +17,6 @@ for r in sys.argv[1:]:
         print(f"{r}: no finished run's metrics.json ({e})")
         continue
     print(f"{r}: held out {h['psnr']:.3f} dB, SSIM {h['ssim']:.3f}, haze {h['haze']:.3f}, samples a ray "
-          f"{m['evaluated_samples_per_ray']:.1f}, grid {m['grid']['full'][0]}^3, occupied {m['occupied_fraction']:.3f}, "
+          f"{m['evaluated_samples_per_ray']:.1f}, grid {m['grid']['full'][0]}^3, "
+          f"occupied {m['occupied_fraction']:.3f}, "
           f"peak RSS {m['peak_rss_mib']:.0f} MiB, fit {m['seconds']['fit']:.0f} s")
