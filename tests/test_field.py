@@ -220,3 +220,27 @@ def test_pack_interleaves_channels_and_its_adjoint_gathers_them_back():
     w = weights.reshape(2, 3, 4, 16)
     assert np.array_equal(np.array(dr.grad(td)), w[..., :1])
     assert np.array_equal(np.array(dr.grad(tc)), w[..., 1:13])
+
+
+def test_the_field_package_imports_no_layer_above_it():
+    """``mi_voldis.field`` (what a field is) stands under the plugins, the renderer, fitting and the tasks,
+    which all import it: none of its modules may import them back."""
+    import ast
+    import pathlib
+
+    import mi_voldis.field
+    above = {"plugins", "render", "fit", "tasks", "bench", "optim", "api", "scene"}
+    found = []
+    for path in pathlib.Path(mi_voldis.field.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level >= 2:
+                target = (node.module or "").split(".")[0]
+                names = [target] if target else [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("mi_voldis."):
+                names = [node.module.split(".")[1]]
+            elif isinstance(node, ast.Import):
+                names = [a.name.split(".")[1] for a in node.names if a.name.startswith("mi_voldis.")]
+            else:
+                continue
+            found += [f"{path.name}: {n}" for n in names if n in above]
+    assert not found, found

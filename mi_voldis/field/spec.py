@@ -1,10 +1,22 @@
-"""Build ``radiance_field`` plugin dictionaries from NumPy arrays (for ``mi.load_dict``)."""
+"""``radiance_field`` plugin dictionaries from NumPy arrays (for ``mi.load_dict``), and the colour channel
+layouts the plugin reads."""
 import mitsuba as mi
 import numpy as np
 
 from ..transforms import to_scalar_transform
 from . import bricks
 from .activations import inverse_softplus, logit
+
+# Colour channels a vertex -> (spherical-harmonic degree, grey view dependence): the layouts the
+# ``radiance_field`` plugin reads (its docstring has the colour model).
+COLOR_LAYOUTS = {3: (0, False), 6: (1, True), 12: (1, False), 27: (2, False)}
+
+
+def color_channels(degree, grey=False):
+    """Raw colour channels of a field at spherical-harmonic ``degree``: an RGB triple for the mean colour and,
+    for every higher harmonic, one grey coefficient (``grey``) or an RGB triple."""
+    harmonics = (degree + 1) ** 2
+    return 3 + (harmonics - 1) * (1 if grey else 3)
 
 
 def box_transform(lo, hi):

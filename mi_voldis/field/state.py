@@ -17,13 +17,12 @@ import mitsuba as mi
 import numpy as np
 
 from ..device import from_numpy
-from ..plugins.radiance_field import COLOR_LAYOUTS, color_channels
 from ..transforms import to_scalar_transform
 from . import bricks
 from .activations import inverse_softplus
 from .bricks import MEAN_CHANNELS
 from .grid import packet_width
-from .spec import box_transform
+from .spec import COLOR_LAYOUTS, box_transform, color_channels
 
 BRICK = 8  # vertices along a brick's edge
 
@@ -32,7 +31,7 @@ BRICK = 8  # vertices along a brick's edge
 class FieldState:
     layout: bricks.Layout  # the lattice and its allocated bricks
     data: mi.Float         # packed values, (slots * B^3 + view vertices) x width floats, slot 0 the empty brick
-    channels: int          # 1 + colour coefficients at a brick vertex (radiance_field.color_channels)
+    channels: int          # 1 + colour coefficients at a brick vertex (spec.color_channels)
     to_world: np.ndarray   # unit cube -> scene space (an axis-aligned box)
     density_scale: float = 1.0  # sigma = density_scale * softplus(raw)
     sh_gate: bool = False       # view dependence scaled by a voxel's opacity (radiance_field's sh_gate)

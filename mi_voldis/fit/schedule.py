@@ -256,7 +256,7 @@ def memory_scale(sh_degree, grey=False, view=False):
     fern: 7.0 GiB of peak RSS at degree 1 and 336^3 against 1.7 GiB at degree 0 and 304^3, 3.3 times as much
     per vertex (reports/notes.md)."""
     from ..field.grid import packet_width
-    from ..plugins.radiance_field import color_channels
+    from ..field.spec import color_channels
     degree = 0 if sh_degree == "auto" else int(sh_degree)
     if degree == 1 and grey and view:
         return 1.0

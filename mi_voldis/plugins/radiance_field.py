@@ -9,6 +9,7 @@ import numpy as np
 
 from ..field import bricks, grid
 from ..field.activations import one_minus_exp, sigmoid, softplus
+from ..field.spec import COLOR_LAYOUTS
 from ..io.vol import grid_values, read_header, read_vol
 from ..transforms import to_matrix
 
@@ -16,15 +17,7 @@ __variant__ = mi.variant()
 
 # colour channels -> (spherical-harmonic degree, grey): RGB; degree 1 with one grey coefficient a harmonic;
 # degree 1 / 2 with an RGB triple a harmonic
-COLOR_LAYOUTS = {3: (0, False), 6: (1, True), 12: (1, False), 27: (2, False)}
 SH_Y0 = 0.28209479177387814  # Y_0^0 = 1 / (2 sqrt(pi))
-
-
-def color_channels(degree, grey=False):
-    """Raw colour channels of a field at spherical-harmonic ``degree``: an RGB triple for the mean colour and,
-    for every higher harmonic, one grey coefficient (``grey``) or an RGB triple."""
-    harmonics = (degree + 1) ** 2
-    return 3 + (harmonics - 1) * (1 if grey else 3)
 
 
 def _unpacked_tensor(slot, doc):
