@@ -57,11 +57,11 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
     dataset = config["dataset"]["path"]
     assert set(FitConfig.ADDED) <= set(config)
     # the settings it was fitted with as a run before them would have been; those whose default has
-    # changed since (sh_color, hull_fill_vertical, sh_gate, sh_view_resolution, sh_view_from, fringe_contrast) read
-    # back as the old value
+    # changed since (sh_color, hull_fill_vertical, sh_gate, sh_view_resolution, sh_view_from, fringe_contrast,
+    # the fitted scene's rules) read back as the old value
     changed = {key for key, value in FitConfig.ADDED.items() if config[key] != value}
     assert changed == {"sh_color", "hull_fill_vertical", "sh_gate", "sh_view_resolution", "sh_view_from",
-                       "fringe_contrast"}
+                       "fringe_contrast", "scene_occupancy_voxels", "scene_stop_transmittance"}
     for key in FitConfig.ADDED:
         if key not in changed:
             del config[key]
@@ -72,6 +72,7 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
     read = FitConfig.from_sources(str(lacking))
     assert read.hull_fill_vertical == 1.0 and read.sh_gate is False and read.sh_color == "rgb"
     assert read.fringe_contrast == 0.0
+    assert read.scene_occupancy_voxels == read.occupancy_voxels and read.scene_stop_transmittance == 1e-4
     # the host's milliseconds it was planned with: llvm's default, not cuda's (where the suite also runs)
     assert finished(str(old), dataset, TINY_FIT + [f"host_ms={FitConfig.ADDED['host_ms']}"])
     cfg = FitConfig.from_sources(str(old / "config.json"))

@@ -3,7 +3,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from helpers import axis_rays, check_gradient, integrator, ortho_scene, random_field
+from helpers import UNIT_BOX, axis_rays, check_gradient, field_dict, integrator, ortho_scene, random_field
 
 from mi_voldis.render.rays import render_rays
 
@@ -74,3 +74,18 @@ def test_mitsuba_render_gradients():
         return dr.sum(img * weights, axis=None)
     for key in ("integrator.full.density", "integrator.bg.color"):
         check_gradient(params, key, loss, rtol=0.03)
+
+
+def test_gradients_with_an_early_stop():
+    """Rays stopped at transmittance 0.05 (dense fields): the adjoint replays the primal's stop, so its
+    gradients are those of the truncated sums (finite differences small enough not to move any ray's stop)."""
+    rng = np.random.default_rng(7)
+    full, bg = (field_dict(rng.normal(2.0, 1.0, (4, 4, 4)), rng.normal(0, 1, (4, 4, 4, 3)), UNIT_BOX) for _ in "ab")
+    integ = integrator(full, bg, samples=24, stop_transmittance=0.05)  # every chain must fall below it
+    o, d, u = axis_rays(64)
+    ev = np.array(render_rays(integ, o, d, u, layers=("full", "bg"))["evaluated"])
+    assert ev.min() < 24 and ev.max() > ev.min()  # rays stop early, at different samples
+    params = mi.traverse(integ)
+    loss = weighted_loss(integ, ("full", "bg"))
+    for key in ("full.density", "full.color", "bg.density", "bg.color"):
+        check_gradient(params, key, loss)

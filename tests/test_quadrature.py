@@ -78,3 +78,26 @@ def test_step_size_sampling_is_exact_and_adapts(step):
                         ("full",))
     n_short = np.array(short["evaluated"])[0]
     assert n_short == min(64, int(np.ceil(0.2 * np.sqrt(2) / step)))
+
+
+@pytest.mark.parametrize("stop", [0.3, 1e-2, 1e-3, 1e-4])
+def test_rays_stop_where_transmittance_falls_below_stop_transmittance(stop):
+    """Through a box of density sigma sampled every delta, a ray evaluates samples until its optical
+    depth n sigma delta reaches -ln(stop): n = ceil(-ln(stop) / (sigma delta)), and its alpha
+    1 - exp(-n sigma delta) is within ``stop`` of the whole box's."""
+    sigma, samples = 10.0, 256
+    x = sigma * 2.0 / samples
+    integ = integrator(constant_field(sigma, COLOR, UNIT_BOX), EMPTY, samples=samples, stop_transmittance=stop)
+    o, d, u = axis_rays(16)
+    out = render_rays(integ, o, d, u, layers=("full",))
+    n = int(np.ceil(-np.log(stop) / x))
+    assert np.all(np.array(out["evaluated"]) == n)
+    alpha = np.array(out["full"][1])
+    np.testing.assert_allclose(alpha, -np.expm1(-n * x), rtol=1e-5)
+    assert np.all(1 - alpha <= stop) and np.all(alpha + np.expm1(-2 * sigma) <= stop)
+
+
+@pytest.mark.parametrize("value", [0.0, 1.0, -1e-3, 2.0])
+def test_stop_transmittance_outside_0_1_is_refused(value):
+    with pytest.raises(Exception, match="stop_transmittance must be in \\(0, 1\\)"):
+        integrator(constant_field(1.0, COLOR, UNIT_BOX), EMPTY, stop_transmittance=value)

@@ -91,7 +91,7 @@ def _speed_error(results, report_dir):
           "rows keep every brick (`carve=false`). Every 8th view held out; PSNR of the full field.", "",
           "![speed vs error](speed_vs_error.png)", "",
           "| run | held-out PSNR | SSIM | budget min | fit s | to within 0.5 dB of best, s | final grid (capture asks) "
-          "| bricks kept | evaluated samples/ray | peak RSS MiB | run folder MB | SH |",
+          "| bricks kept | evaluated samples/ray (held-out renders) | peak RSS MiB | run folder MB | SH |",
           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, f in results["fits"].items():
         m = f["metrics"]

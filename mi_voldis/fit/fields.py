@@ -187,9 +187,10 @@ def occupancy_sigma(cfg, state):
     return -np.log1p(-cfg.occupancy_alpha) / voxel_size(state.fields["full"])
 
 
-def occupancy_resolution(cfg, state):
-    """Occupancy cells along the box's longest side: cells ``occupancy_voxels`` voxels across."""
-    return max(1, int(np.ceil((max(state.fields["full"].shape) - 1) / cfg.occupancy_voxels)))
+def occupancy_resolution(cfg, state, voxels=None):
+    """Occupancy cells along the box's longest side: cells ``voxels`` (default ``occupancy_voxels``)
+    voxels of the current grid across."""
+    return max(1, int(np.ceil((max(state.fields["full"].shape) - 1) / (voxels or cfg.occupancy_voxels))))
 
 
 def step_voxels(cfg, state):
@@ -213,22 +214,32 @@ def scene_properties(inputs, state, **options):
                                  step_size=float(sample_step(inputs.cfg, state)), **options)
 
 
-def fit_integrator(inputs, state):
-    """The ``voldis`` integrator over the current fields (no occupancy: fitting updates it itself)."""
+def fit_integrator(inputs, state, properties=None):
+    """The ``voldis`` integrator over the current fields with ``properties`` (default
+    :func:`scene_properties`: no occupancy, fitting updates it itself)."""
     full = state.fields["full"]
     bg = state.fields.get("bg")
     # the full phase of "refit": an empty stand-in background over the same box
     bg = bg.plugin() if bg is not None else constant_field(1e-12, (0.0, 0.0, 0.0), full.to_world)
-    return build_integrator({"full": full.plugin(), "bg": bg}, scene_properties(inputs, state))
+    return build_integrator({"full": full.plugin(), "bg": bg}, properties or scene_properties(inputs, state))
 
 
 def scene_integrator(inputs, state):
     """The integrator a finished fit's ``scene.xml`` describes, so that what is scored is what the run
-    renders: :func:`fit_integrator` with the occupancy grid the scene carries (cells ``occupancy_voxels``
-    voxels across, threshold :func:`occupancy_sigma`; none without ``occupancy_at_step``), whose skipped
-    cells change the render (a faint haze left out). Returns (integrator, occupancy cells or 0)."""
-    integrator = fit_integrator(inputs, state)
-    cells = occupancy_resolution(inputs.cfg, state) if inputs.cfg.occupancy_at_step else 0
-    if cells:
-        integrator.update_occupancy(cells, occupancy_sigma(inputs.cfg, state))
-    return integrator, cells
+    renders: :func:`fit_integrator` with the scene's own rules (:func:`fitted_scene_properties`), whose
+    skipped cells and earlier stop change the render (a faint haze left out). Returns (integrator, its
+    properties)."""
+    props = fitted_scene_properties(inputs, state)
+    integrator = fit_integrator(inputs, state, props)
+    return integrator, props
+
+
+def fitted_scene_properties(inputs, state):
+    """Integrator properties of the fitted scene: :func:`scene_properties` with occupancy cells
+    ``scene_occupancy_voxels`` voxels across at the threshold :func:`occupancy_sigma` (none without
+    ``occupancy_at_step``) and rays stopped at ``scene_stop_transmittance``."""
+    cfg = inputs.cfg
+    cells = occupancy_resolution(cfg, state, cfg.scene_occupancy_voxels) if cfg.occupancy_at_step else 0
+    return scene_properties(inputs, state, occupancy_resolution=cells,
+                            occupancy_threshold=float(occupancy_sigma(cfg, state)),
+                            stop_transmittance=float(cfg.scene_stop_transmittance))

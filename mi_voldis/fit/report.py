@@ -24,7 +24,8 @@ def evaluate(ds, integrator):
         out = render_camera(integrator, ds.cameras[v], ("composite", "full", "bg", "fg"))
         renders[v] = out
         full = np.clip(ds.as_photographed(out["full"]), 0, 1)
-        row = {"view": int(v), "psnr": psnr(full, ds.images[v]), "ssim": ssim(full, ds.images[v])}
+        row = {"view": int(v), "psnr": psnr(full, ds.images[v]), "ssim": ssim(full, ds.images[v]),
+               "samples_per_ray": float(out["evaluated"].mean())}
         front, hit = front_weight(integrator, ds.cameras[v])  # the full field's haze (render.surface)
         row["haze"] = float(front[hit].mean()) if hit.any() else float("nan")
         if ds.masks is not None:  # the background's, inside the masks and outside them

@@ -19,7 +19,7 @@ from ..io.run_folder import check_output, dataset_inputs, fingerprint, peak_rss_
 from ..plots import plot_log
 from ..scene import write_scene
 from .config import FitConfig
-from .fields import occupancy_sigma, sample_step, scene_integrator, scene_properties
+from .fields import sample_step, scene_integrator
 from .report import evaluate, write_previews
 from .schedule import backend
 from .train import fit
@@ -88,10 +88,8 @@ def dataset_record(path, dataset, holdout, factor):
 def write_run(stage, inputs, state, fit_seconds):
     """Everything a finished fit writes beside its checkpoint; returns the metrics."""
     ds, cfg = inputs.ds, inputs.cfg
-    integrator, cells = scene_integrator(inputs, state)
+    integrator, props = scene_integrator(inputs, state)
     summary, rows, renders = evaluate(ds, integrator)
-    props = scene_properties(inputs, state, occupancy_resolution=cells,
-                             occupancy_threshold=float(occupancy_sigma(cfg, state)))
     write_scene(stage, {role: state.fields[role] for role in ("full", "bg")}, props,
                 [ds.cameras[v] for v in ds.test])
     write_previews(os.path.join(stage, PREVIEW), renders, list(ds.test[: cfg.preview_views]),
@@ -104,7 +102,9 @@ def write_run(stage, inputs, state, fit_seconds):
         "seconds": {"fit": fit_seconds, **{f"phase_{k}": v for k, v in state.phase_times.items()}},
         "peak_rss_mib": peak_rss_mib(),
         "msps_mean": float(np.mean([r["msps"] for r in train_rows])) if train_rows else None,
-        "evaluated_samples_per_ray": float(np.mean([r["samples"] for r in train_rows[-50:]]) / cfg.batch_rays)
+        # the fitted scene's held-out renders (its rules: fitted_scene_properties), and the last training steps'
+        "evaluated_samples_per_ray": summary.get("samples_per_ray"),
+        "train_samples_per_ray": float(np.mean([r["samples"] for r in train_rows[-50:]]) / cfg.batch_rays)
         if train_rows else None,
         "max_samples_per_ray": cfg.max_samples, "step_size": sample_step(cfg, state),
         "grid": {r: list(s.shape) for r, s in state.fields.items()},

@@ -6,7 +6,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..render import layers as layer_io
-from ..render import march, mixing
+from ..render import march, mixing, quadrature
 from ..render.occupancy import Occupancy, local_to_scene_np
 from ..space import SceneSpace
 from ..transforms import is_identity, to_matrix, to_scalar_transform
@@ -66,6 +66,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
        - Skip samples in cells of an occupancy grid (this many cells along the longest side of the
          fields' bounding box) where no field's density exceeds the threshold (per unit length of
          scene space). 0 disables skipping. (Default: 0, 0.01)
+     * - stop_transmittance
+       - |float|
+       - A ray stops once every field's transmittance along it has fallen below this (early
+         termination): what lies behind changes the pixel by at most that much, times its colour.
+         (Default: 1e-4)
      * - ndc_to_world, ndc_near, ndc_scale_x, ndc_scale_y
        - |transform|, |float|
        - Forward-facing scenes: sample and store the fields in the NDC space of this reference camera
@@ -137,6 +142,9 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
                                     (props.get("ndc_scale_x", 1.0), props.get("ndc_scale_y", 1.0)))
         else:
             self.space = SceneSpace()
+        self.stop_transmittance = float(props.get("stop_transmittance", quadrature.STOP_TRANSMITTANCE))
+        if not 0 < self.stop_transmittance < 1:
+            raise ValueError(f"voldis: stop_transmittance must be in (0, 1), got {self.stop_transmittance}")
         self.fields = {}
         for name in props.keys():
             value = props.get(name)
@@ -163,7 +171,8 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         and :func:`mi_voldis.scene.write_scene` take them: change some to build a variant of it."""
         props = {"composition": self.composition, "mode": self.mode, "samples": self.samples,
                  "step_size": self.step_size, "near": self.near, "occupancy_resolution": self.occupancy_resolution,
-                 "occupancy_threshold": self.occupancy_threshold, **self.space.integrator_properties()}
+                 "occupancy_threshold": self.occupancy_threshold, "stop_transmittance": self.stop_transmittance,
+                 **self.space.integrator_properties()}
         for name, m in (("fg_to_world", self.fg_to_world), ("bg_to_world", self.bg_to_world)):
             if not is_identity(m):
                 props[name] = to_scalar_transform(m)
@@ -232,7 +241,8 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             skip = self.skip_length()
             self._plans[key] = march.Plan(tuple(lk for lk in lookups if lk.key in needed), sources,
                                           self.composition, layers, key[1], boxes, self.space, self.occupancy,
-                                          self.step_size, skip, key[2], self.near, key[3])
+                                          self.step_size, skip, key[2], self.near, key[3],
+                                          quadrature.stop_depth(self.stop_transmittance))
         return self._plans[key]
 
     def skip_length(self):

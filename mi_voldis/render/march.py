@@ -106,6 +106,7 @@ class Plan:
     distortion: tuple = ()  # layers ("full", "bg") whose chain's distortion loss the march computes
     near: float = 0.0  # world distance from the ray origin where sampling starts
     near_grad: float = 0.0  # > 0: the adjoint scales sample gradients by min(1, (d / near_grad)^2) (docstring)
+    stop: float = quadrature.stop_depth(quadrature.STOP_TRANSMITTANCE)  # rays end past this optical depth
 
     def __post_init__(self):
         # Chains and terms depend only on the rule and layers: find them once with placeholder values.
@@ -297,12 +298,13 @@ class Record:
         return out
 
 
-def _transparent(depth):
-    """Some chain is still transparent enough to matter (early termination)."""
+def _transparent(depth, stop):
+    """Some chain's optical depth is still below ``stop``, i.e. its transmittance above exp(-stop): it
+    is transparent enough to matter (early termination)."""
     lowest = None
     for s in depth.values():
         lowest = s if lowest is None else dr.minimum(lowest, s)
-    return lowest < quadrature.OPTICAL_DEPTH_CUTOFF
+    return lowest < stop
 
 
 def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, probe=None):
@@ -364,7 +366,7 @@ def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, 
                 carry = _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc, scale)
         depth = {c: depth[c] + dr.detach(x[c]) for c in plan.chains}
         i, k = i + 1, k + dr.select(evaluate, 1, 0)
-        return i, k, b, active & path.more(i, k, b) & _transparent(depth), depth, carry
+        return i, k, b, active & path.more(i, k, b) & _transparent(depth, plan.stop), depth, carry
 
     state = (mi.UInt32(0), mi.UInt32(0), path.start(), mi.Bool(active) & rays.hit, depth, carry)
     *_, carry = dr.while_loop(state, lambda i, k, b, a, *_: a, body,

@@ -11,11 +11,18 @@ underflow chains, alpha uses a cancellation-free 1 - exp(-x) and T an exp accura
 (:mod:`mi_voldis.field.activations`, on CUDA's approximate exp too), so densities from 1e-8 to 1e8 give alpha
 in [0, 1] with full relative precision. ``ops``: as in :mod:`mi_voldis.field.activations`.
 """
+import math
+
 from ..field.activations import DRJIT, exp, one_minus_exp
 
-# Rays stop once every field's transmittance is below exp(-OPTICAL_DEPTH_CUTOFF) = 1e-4: what is left
-# can change a pixel by at most 1e-4 (times its colour).
-OPTICAL_DEPTH_CUTOFF = 9.2103
+# Rays stop once every field's transmittance is below this (early termination): what is left can change
+# a pixel by at most that much (times its colour). The ``voldis`` integrator's ``stop_transmittance``.
+STOP_TRANSMITTANCE = 1e-4
+
+
+def stop_depth(stop_transmittance):
+    """The optical depth -ln T at which a ray's transmittance falls to ``stop_transmittance``."""
+    return float(-math.log(stop_transmittance))
 
 
 def alpha(optical_depth, ops=DRJIT):

@@ -13,11 +13,12 @@ CHUNK = 1 << 16  # rays per launch
 def render_camera(integrator, camera, layers=("composite", "full", "bg", "fg"), samples=None):
     """Layers of a :class:`~mi_voldis.cameras.Camera` through pixel centres (jitter 0.5):
     ``{layer: (rgb (H, W, 3), alpha (H, W), depth (H, W))}``, display-encoded colours, plus
-    ``"fg_coverage"`` (H, W) with the ``fg`` layer (see :func:`mi_voldis.render.march.march`)."""
+    ``"fg_coverage"`` (H, W) with the ``fg`` layer and ``"evaluated"`` (H, W), the samples each pixel's
+    ray evaluated (see :func:`mi_voldis.render.march.march`)."""
     py, px = np.mgrid[0:camera.height, 0:camera.width]
     o, d = pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
     out = {layer: ([], [], []) for layer in layers}
-    coverage = []
+    coverage, evaluated = [], []
     with dr.suspend_grad():
         for s in range(0, len(o), CHUNK):
             oo, dd = from_numpy(mi.Point3f, o[s:s + CHUNK]), from_numpy(mi.Vector3f, d[s:s + CHUNK])
@@ -28,9 +29,11 @@ def render_camera(integrator, camera, layers=("composite", "full", "bg", "fg"), 
                 out[layer][1].append(np.array(a))
                 out[layer][2].append(np.array(z))
             coverage.append(np.array(res["fg_coverage"]))
+            evaluated.append(np.array(res["evaluated"]))
     h, w = camera.height, camera.width
     result = {layer: (np.concatenate(v[0]).reshape(h, w, 3), np.concatenate(v[1]).reshape(h, w),
                       np.concatenate(v[2]).reshape(h, w)) for layer, v in out.items()}
+    result["evaluated"] = np.concatenate(evaluated).reshape(h, w)
     if "fg" in layers:
         result["fg_coverage"] = np.concatenate(coverage).reshape(h, w)
     return result
