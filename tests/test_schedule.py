@@ -280,6 +280,20 @@ def test_a_contracted_fit_whose_rays_would_pass_the_sample_cap_stays_on_the_grid
     run_fit(tiny_dataset, out, FitConfig.from_sources(None, sets[:-1]), progress=False)
     metrics = json.load(open(os.path.join(out, "metrics.json")))
     assert metrics["schedule"]["stages"][-1][1] > 8 and "samples_caps" not in metrics["schedule"]["plan"]
+    # its scene.xml strides through thin cells (contracted space), and renders what its metrics scored
+    import mitsuba as mi
+
+    from mi_voldis.data import load_dataset
+    from mi_voldis.metrics import psnr
+    from mi_voldis.render.views import render_camera
+    integ = mi.load_file(os.path.join(out, "scene.xml")).integrator()
+    assert integ.strides and integ.plan(("full",)).strides
+    ds = load_dataset(tiny_dataset)
+    v = ds.test[0]
+    rendered = render_camera(integ, ds.cameras[v])  # every layer, as scored (their chains end the rays)
+    assert abs(psnr(np.clip(ds.as_photographed(rendered["full"]), 0, 1), ds.images[v])
+               - metrics["per_view"][0]["psnr"]) < 1e-3
+    assert abs(rendered["evaluated"].mean() - metrics["per_view"][0]["samples_per_ray"]) < 1e-6
 
 
 @pytest.mark.parametrize("steps", [5, 17])

@@ -65,13 +65,14 @@ class FitConfig(Settings):
     # no annotation): plans before host_ms had no host term; background refits before bg_lr_* / bg_tv_*
     # stepped with the then default rates and TV weights, and filled the hull isotropically; degree-1 colour
     # before sh_color was RGB; backgrounds before fringe_contrast kept the dark fringe; scenes before
-    # scene_occupancy_voxels / scene_stop_transmittance were written with fitting's cells and stop
+    # scene_occupancy_voxels / scene_stop_transmittance / scene_strides were written with fitting's cells,
+    # stop and steps
     ADDED = {"sh_color": "rgb", "host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4,
              "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
              "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0, "fringe_contrast": 0.0,
-             "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4}
+             "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4, "scene_strides": False}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -260,6 +261,8 @@ class FitConfig(Settings):
                                                     "transmittance falls below this (fitting: 1e-4): what "
                                                     "lies behind changes a pixel by at most that much",
                                               above=0, high=0.5)
+    scene_strides: bool = setting(True, "the fitted scene, in contracted space, crosses occupied cells of thin "
+                                        "density in longer steps (the voldis integrator's strides)")
     empty_color_alpha: float = setting(1e-3, "background colour is reset to black where its voxel opacity is "
                                              "lower", low=0, high=1)
 

@@ -237,9 +237,11 @@ def scene_integrator(inputs, state):
 def fitted_scene_properties(inputs, state):
     """Integrator properties of the fitted scene: :func:`scene_properties` with occupancy cells
     ``scene_occupancy_voxels`` voxels across at the threshold :func:`occupancy_sigma` (none without
-    ``occupancy_at_step``) and rays stopped at ``scene_stop_transmittance``."""
+    ``occupancy_at_step``), rays stopped at ``scene_stop_transmittance`` and, in contracted space with
+    ``scene_strides``, longer steps through thin cells."""
     cfg = inputs.cfg
     cells = occupancy_resolution(cfg, state, cfg.scene_occupancy_voxels) if cfg.occupancy_at_step else 0
     return scene_properties(inputs, state, occupancy_resolution=cells,
                             occupancy_threshold=float(occupancy_sigma(cfg, state)),
-                            stop_transmittance=float(cfg.scene_stop_transmittance))
+                            stop_transmittance=float(cfg.scene_stop_transmittance),
+                            strides=bool(cfg.scene_strides and inputs.space.is_curved) or None)

@@ -66,6 +66,11 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
        - Skip samples in cells of an occupancy grid (this many cells along the longest side of the
          fields' bounding box) where no field's density exceeds the threshold (per unit length of
          scene space). 0 disables skipping. (Default: 0, 0.01)
+     * - strides
+       - |boolean|
+       - Contracted space with an occupancy grid: occupied cells where every field's optical depth per
+         voxel stays below a level of :data:`mi_voldis.render.march.STRIDES` are crossed in that level's
+         longer steps, never reaching density above it. (Default: false)
      * - stop_transmittance
        - |float|
        - A ray stops once every field's transmittance along it has fallen below this (early
@@ -145,6 +150,9 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         self.stop_transmittance = float(props.get("stop_transmittance", quadrature.STOP_TRANSMITTANCE))
         if not 0 < self.stop_transmittance < 1:
             raise ValueError(f"voldis: stop_transmittance must be in (0, 1), got {self.stop_transmittance}")
+        self.strides = bool(props.get("strides", False))
+        if self.strides and not self.space.is_curved:
+            raise ValueError("voldis: strides need a contracted space (contract_to_world)")
         self.fields = {}
         for name in props.keys():
             value = props.get(name)
@@ -159,6 +167,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
                 raise ValueError(f"voldis: a '{role}' radiance_field medium is required")
         self._plans = {}
         self.occupancy = None
+        self._strides = ()
         self.occupancy_threshold = float(props.get("occupancy_threshold", 0.01))
         self.occupancy_resolution = int(props.get("occupancy_resolution", 0))
         if self.occupancy_resolution < 0:
@@ -172,6 +181,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         props = {"composition": self.composition, "mode": self.mode, "samples": self.samples,
                  "step_size": self.step_size, "near": self.near, "occupancy_resolution": self.occupancy_resolution,
                  "occupancy_threshold": self.occupancy_threshold, "stop_transmittance": self.stop_transmittance,
+                 "strides": self.strides,
                  **self.space.integrator_properties()}
         for name, m in (("fg_to_world", self.fg_to_world), ("bg_to_world", self.bg_to_world)):
             if not is_identity(m):
@@ -181,7 +191,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
     def update_occupancy(self, resolution, threshold=None, extra=None):
         """Rebuild the occupancy grid from the fields' current densities (``resolution`` 0: off).
         ``extra``: scene-space points to mark occupied regardless (see :class:`Occupancy`)."""
-        self.occupancy = None
+        self.occupancy, self._strides = None, ()
         self._plans.clear()
         if resolution:
             lookups, sources = self._lookups()
@@ -189,12 +199,27 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             lo, hi = self.scene_bounds()
             self.occupancy = Occupancy.build(dense, self.space, resolution,
                                              threshold or self.occupancy_threshold, lo, hi, extra)
+            if self.strides:
+                self._strides = self._stride_levels(dense, lo, hi, extra)
             self._plans.clear()
         return self.occupancy
 
+    def _stride_levels(self, lookups, lo, hi, extra):
+        """(occupancy, step) of each level of :data:`march.STRIDES` with a step longer than the march's: cells
+        ``cells`` voxels (the fields' largest) across, marked where density reaches the level's optical depth
+        per voxel; the step ``step`` voxels, at most 0.9 (cell - voxel)."""
+        voxel, levels = self.occupancy.reach, []
+        for depth, cells, step in march.STRIDES:
+            resolution = max(1, int(np.ceil(float(np.max(hi - lo)) / (cells * voxel))))
+            grid = Occupancy.build(lookups, self.space, resolution, depth / voxel, lo, hi, extra)
+            level_step = min(step * voxel, 0.9 * (grid.cell_size - grid.reach))
+            if level_step > self.step_size:
+                levels.append((grid, level_step))
+        return tuple(levels)
+
     def use_occupancy(self, occupancy):
         """Skip with a given :class:`Occupancy` grid (e.g. one restored from a checkpoint); None: off."""
-        self.occupancy = occupancy
+        self.occupancy, self._strides = occupancy, ()
         self._plans.clear()
 
     def scene_bounds(self):
@@ -242,7 +267,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
             self._plans[key] = march.Plan(tuple(lk for lk in lookups if lk.key in needed), sources,
                                           self.composition, layers, key[1], boxes, self.space, self.occupancy,
                                           self.step_size, skip, key[2], self.near, key[3],
-                                          quadrature.stop_depth(self.stop_transmittance))
+                                          quadrature.stop_depth(self.stop_transmittance), self._strides)
         return self._plans[key]
 
     def skip_length(self):
