@@ -18,7 +18,6 @@ import drjit as dr  # noqa: E402
 from mi_voldis.cameras import pixel_rays  # noqa: E402
 from mi_voldis.device import from_numpy  # noqa: E402
 from mi_voldis.metrics import psnr  # noqa: E402
-from mi_voldis.render import quadrature  # noqa: E402
 from mi_voldis.render.rays import render_rays  # noqa: E402
 from mi_voldis.render.views import render_camera  # noqa: E402
 from mi_voldis.tasks.base import FittedRun  # noqa: E402
@@ -60,8 +59,8 @@ ref = None
 for spec in args[1:]:
     mult, cells, trans = spec.split(":")
     mult, cells, trans = float(mult), int(cells), float(trans)
-    integ = run.integrator(occupancy_resolution=int(np.ceil((res - 1) / cells)), occupancy_threshold=base_thr * mult)
-    quadrature.OPTICAL_DEPTH_CUTOFF = float(-np.log(trans))
+    integ = run.integrator(occupancy_resolution=int(np.ceil((res - 1) / cells)), occupancy_threshold=base_thr * mult,
+                           stop_transmittance=trans)
     out = {v: render(integ, ds.cameras[v]) for v in tests}
     if ref is None:
         ref = out
