@@ -6,29 +6,15 @@ PSNR against the photographs, the strided render's fidelity to the plain one, an
 """
 import sys
 
-import mitsuba as mi
+import drjit as dr
 import numpy as np
+from common import fitted_run
 
-mi.set_variant("llvm_ad_rgb")
-import drjit as dr  # noqa: E402
+from mi_voldis.metrics import psnr
+from mi_voldis.render.views import render_camera
 
-from mi_voldis.metrics import psnr  # noqa: E402
-from mi_voldis.render.views import render_camera  # noqa: E402
-from mi_voldis.tasks.base import FittedRun  # noqa: E402
-
-args = sys.argv[1:]
-nviews = None
-if "--views" in args:
-    i = args.index("--views")
-    nviews = int(args[i + 1])
-    del args[i:i + 2]
-run = FittedRun(args[0])
-ds = run.dataset
-tests = list(ds.test)
-if nviews and len(tests) > nviews:
-    tests = [tests[i] for i in np.linspace(0, len(tests) - 1, nviews).round().astype(int)]
-res = max(run.fields["full"].shape)
-print(f"{args[0]}: grid {res}, views {tests}", flush=True)
+run, ds, tests, res, _ = fitted_run(sys.argv[1:])
+print(f"{sys.argv[1]}: grid {res}, views {tests}", flush=True)
 out = {}
 for strides in (False, True):
     integ = run.integrator(occupancy_resolution=res - 1, stop_transmittance=1e-3, strides=strides)

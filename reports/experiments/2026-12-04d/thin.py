@@ -11,35 +11,21 @@ dense density. Prints held-out PSNR, fidelity to the scene's own render and eval
 import dataclasses
 import sys
 
-import mitsuba as mi
+import drjit as dr
 import numpy as np
+from common import fitted_run
 
-mi.set_variant("llvm_ad_rgb")
-import drjit as dr  # noqa: E402
+from mi_voldis.metrics import psnr
+from mi_voldis.render.occupancy import Occupancy
+from mi_voldis.render.views import render_camera
 
-from mi_voldis.metrics import psnr  # noqa: E402
-from mi_voldis.render.occupancy import Occupancy  # noqa: E402
-from mi_voldis.render.views import render_camera  # noqa: E402
-from mi_voldis.tasks.base import FittedRun  # noqa: E402
-
-args = sys.argv[1:]
-nviews = None
-if "--views" in args:
-    i = args.index("--views")
-    nviews = int(args[i + 1])
-    del args[i:i + 2]
-run = FittedRun(args[0])
-ds = run.dataset
-tests = list(ds.test)
-if nviews and len(tests) > nviews:
-    tests = [tests[i] for i in np.linspace(0, len(tests) - 1, nviews).round().astype(int)]
-res = max(run.fields["full"].shape)
+run, ds, tests, res, specs = fitted_run(sys.argv[1:])
 props = run.properties
-print(f"{args[0]}: grid {res}, scene occupancy {props['occupancy_resolution']} cells, threshold "
+print(f"{sys.argv[1]}: grid {res}, scene occupancy {props['occupancy_resolution']} cells, threshold "
       f"{props['occupancy_threshold']:.4g}, stop {props.get('stop_transmittance')}, step {props['step_size']:.4g}; "
       f"views {tests}", flush=True)
 ref = None
-for spec in args[1:]:
+for spec in specs:
     integ = run.integrator(occupancy_resolution=res - 1, stop_transmittance=1e-3)  # today's scene rule
     if spec != "scene":  # MULT:CELLS:STEP[,MULT:CELLS:STEP...], the lowest threshold first
         lookups, sources = integ._lookups()
