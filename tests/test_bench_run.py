@@ -61,7 +61,8 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
     # the fitted scene's rules) read back as the old value
     changed = {key for key, value in FitConfig.ADDED.items() if config[key] != value}
     assert changed == {"sh_color", "hull_fill_vertical", "sh_gate", "sh_view_resolution", "sh_view_from",
-                       "fringe_contrast", "scene_occupancy_voxels", "scene_stop_transmittance", "scene_strides"}
+                       "fringe_contrast", "scene_occupancy_voxels", "scene_stop_transmittance", "scene_strides",
+                       "strides"}
     for key in FitConfig.ADDED:
         if key not in changed:
             del config[key]

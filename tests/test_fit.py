@@ -191,13 +191,21 @@ def test_train_script_errors_name_the_dataset(tmp_path):
 
 # with learning rates per brick (lr_views): a resumed fit counts the bricks' views anew, to the same scales
 RESUME_SETS = TINY_FIT + ["sh_degree=0", "checkpoint_every=5", "steps_full=80", "lr_views=1"]
+# in contracted space the fit strides through thin cells: a resumed fit takes back the levels it was stepping with
+RESUME_SPACES = {"world": [], "contract": ["space=contract"]}
 
 
 @pytest.fixture(scope="module")
 def uninterrupted(tiny_dataset, tmp_path_factory):
-    ref = tmp_path_factory.mktemp("resume") / "ref"
-    subprocess.run(train_args(tiny_dataset, ref, RESUME_SETS), check=True, capture_output=True)
-    return ref
+    runs = {}
+
+    def run(space):
+        if space not in runs:
+            runs[space] = tmp_path_factory.mktemp("resume") / "ref"
+            subprocess.run(train_args(tiny_dataset, runs[space], RESUME_SETS + RESUME_SPACES[space]), check=True,
+                           capture_output=True)
+        return runs[space]
+    return run
 
 
 def train_args(dataset, out, sets):
@@ -214,23 +222,28 @@ def grids(run):
     return out
 
 
-@pytest.mark.parametrize("phase,step", [("full", 35), ("bg", 5)])
-def test_resume_after_kill_equals_never_stopping(tiny_dataset, uninterrupted, tmp_path, phase, step):
+@pytest.mark.parametrize("space,phase,step", [("world", "full", 35), ("world", "bg", 5), ("contract", "full", 35)])
+def test_resume_after_kill_equals_never_stopping(tiny_dataset, uninterrupted, tmp_path, space, phase, step):
     """kill -9 a fit after a checkpoint (in the full phase past the start of empty-space skipping, or in
-    the background phase), resume it: the fields equal an uninterrupted run's bit for bit (both on one
-    thread), no step is lost or repeated, and the previous run directory stays whole meanwhile."""
+    the background phase; in contracted space, with the stride levels of that skipping), resume it: the
+    fields equal an uninterrupted run's bit for bit (both on one thread), no step is lost or repeated, and
+    the previous run directory stays whole meanwhile."""
+    sets = RESUME_SETS + RESUME_SPACES[space]
     out = tmp_path / "run"
     os.makedirs(out)
     (out / "keep.txt").write_text("an earlier run")
     write_marker(str(out), "train")  # an earlier fit's output: replaced when the resumed one is complete
-    proc = subprocess.Popen(train_args(tiny_dataset, out, RESUME_SETS), stdout=subprocess.DEVNULL,
+    proc = subprocess.Popen(train_args(tiny_dataset, out, sets), stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
-    kill_after_checkpoint(proc, tmp_path / "run.partial" / "checkpoints" / "last.npz", step, phase=phase)
+    checkpoint = tmp_path / "run.partial" / "checkpoints" / "last.npz"
+    kill_after_checkpoint(proc, checkpoint, step, phase=phase)
     assert (out / "keep.txt").exists() and not (out / "metrics.json").exists()  # old run intact
-    run = subprocess.run(train_args(tiny_dataset, out, RESUME_SETS) + ["--resume"], capture_output=True, text=True)
+    with np.load(checkpoint) as f:  # the checkpoint resumed from holds stride levels exactly where it strides
+        assert ("strides/0/cells" in f.files) == (space == "contract")
+    run = subprocess.run(train_args(tiny_dataset, out, sets) + ["--resume"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert not (out / "keep.txt").exists() and (out / "metrics.json").exists()  # swapped in when complete
-    want, got = grids(uninterrupted), grids(out)
+    want, got = grids(uninterrupted(space)), grids(out)
     assert sorted(want) == sorted(got)
     for key in want:
         np.testing.assert_array_equal(got[key], want[key], err_msg=key)

@@ -66,13 +66,14 @@ class FitConfig(Settings):
     # stepped with the then default rates and TV weights, and filled the hull isotropically; degree-1 colour
     # before sh_color was RGB; backgrounds before fringe_contrast kept the dark fringe; scenes before
     # scene_occupancy_voxels / scene_stop_transmittance / scene_strides were written with fitting's cells,
-    # stop and steps
+    # stop and steps; fits before strides marched every occupied cell at the fit's step
     ADDED = {"sh_color": "rgb", "host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4,
              "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
              "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0, "fringe_contrast": 0.0,
-             "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4, "scene_strides": False}
+             "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4, "scene_strides": False,
+             "strides": False}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -253,6 +254,8 @@ class FitConfig(Settings):
                                            "the initial one, so only space the data carved out is skipped",
                                      above=0, high=1)
     occupancy_every: int = setting(100, "steps between occupancy updates", low=1)
+    strides: bool = setting(True, "fitting, in contracted space, crosses occupied cells of thin density in "
+                                  "longer steps (the voldis integrator's strides): fewer samples a step")
     scene_occupancy_voxels: int = setting(1, "occupancy cells of the fitted scene (the scene.xml a run writes, "
                                              "scores and every task renders) are this many voxels across: "
                                              "cells of one voxel skip the empty air between a surface's voxels "

@@ -216,12 +216,18 @@ def scene_properties(inputs, state, **options):
 
 def fit_integrator(inputs, state, properties=None):
     """The ``voldis`` integrator over the current fields with ``properties`` (default
-    :func:`scene_properties`: no occupancy, fitting updates it itself)."""
+    :func:`scene_properties` with fitting's ``strides``: no occupancy, fitting updates it itself)."""
     full = state.fields["full"]
     bg = state.fields.get("bg")
     # the full phase of "refit": an empty stand-in background over the same box
     bg = bg.plugin() if bg is not None else constant_field(1e-12, (0.0, 0.0, 0.0), full.to_world)
-    return build_integrator({"full": full.plugin(), "bg": bg}, properties or scene_properties(inputs, state))
+    properties = properties or scene_properties(inputs, state, strides=curved_strides(inputs, inputs.cfg.strides))
+    return build_integrator({"full": full.plugin(), "bg": bg}, properties)
+
+
+def curved_strides(inputs, on):
+    """The integrator's ``strides`` property for a setting ``on``: only contracted space has them."""
+    return bool(on and inputs.space.is_curved) or None
 
 
 def scene_integrator(inputs, state):
@@ -244,4 +250,4 @@ def fitted_scene_properties(inputs, state):
     return scene_properties(inputs, state, occupancy_resolution=cells,
                             occupancy_threshold=float(occupancy_sigma(cfg, state)),
                             stop_transmittance=float(cfg.scene_stop_transmittance),
-                            strides=bool(cfg.scene_strides and inputs.space.is_curved) or None)
+                            strides=curved_strides(inputs, cfg.scene_strides))

@@ -106,7 +106,7 @@ class FieldFit:
         self.view_zero = {r: view_lattice_zero(self.integrator.fields[r]) for r in self.roles}
         self.neighbours = {}  # per role, made when the TV first needs them
         if resume and self.state.occupancy is not None and self.state.occupancy_phase == self.phase:
-            self.integrator.use_occupancy(self.state.occupancy)
+            self.integrator.use_occupancy(self.state.occupancy, self.state.strides)
         elif self.state.occupancy_on:
             self.update_occupancy()
 
@@ -150,6 +150,7 @@ class FieldFit:
         extra = self.state.hull_points if self.hull is not None else None
         self.state.occupancy = self.integrator.update_occupancy(occupancy_resolution(self.inputs.cfg, self.state),
                                                                 occupancy_sigma(self.inputs.cfg, self.state), extra)
+        self.state.strides = self.integrator.stride_levels
         self.state.occupancy_phase = self.phase
 
     def sync_states(self):

@@ -42,6 +42,7 @@ class FitState:
     plan: dict | None = None  # minutes, capture / affordable / final resolution, seconds per coarse step
     occupancy: object = None  # the skipping grid in use (mi_voldis.render.occupancy.Occupancy), or None
     occupancy_phase: int | None = None  # the phase that built it: a resumed phase takes it back unchanged
+    strides: tuple = ()  # ((Occupancy, step), ...): the integrator's stride levels built with it (strides)
     prior: dict | None = None  # what the lifted background prior did (mi_voldis.fit.lift.lift_prior)
     prior_keys: np.ndarray | None = None  # lattice keys of the background vertices it changed
 
@@ -75,8 +76,9 @@ class FitState:
             arrays["exposure"] = np.array(self.exposure)
         if self.occupancy is not None:
             o = self.occupancy
-            arrays.update({"occupancy/cells": o.cells, "occupancy/lo": o.lo, "occupancy/hi": o.hi,
-                           "occupancy/reach": np.array(o.reach)})
+            arrays.update(occupancy_arrays("occupancy", o))
+        for k, (o, step) in enumerate(self.strides):
+            arrays.update(occupancy_arrays(f"strides/{k}", o, step=np.array(step)))
         Checkpoint(path).save(arrays, meta)
 
     @classmethod
@@ -98,8 +100,23 @@ class FitState:
                                        None if view is None else tuple(int(v) for v in view))
         adam.load({k[5:]: v for k, v in arrays.items() if k.startswith("adam/")}, meta["adam_t"])
         exposure = from_numpy(mi.Float, arrays["exposure"]) if "exposure" in arrays else None
-        occupancy = Occupancy(arrays["occupancy/lo"], arrays["occupancy/hi"], arrays["occupancy/cells"],
-                              float(arrays["occupancy/reach"])) if "occupancy/cells" in arrays else None
+        occupancy = occupancy_from(arrays, "occupancy") if "occupancy/cells" in arrays else None
+        strides, k = [], 0
+        while f"strides/{k}/cells" in arrays:
+            strides.append((occupancy_from(arrays, f"strides/{k}"), float(arrays[f"strides/{k}/step"])))
+            k += 1
         return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields, hull_points=arrays.get("hull_points"),
-                   prior_keys=arrays.get("prior_keys"),
-                   exposure=exposure, occupancy=occupancy, **{key: meta.get(key) for key in cls.META})
+                   prior_keys=arrays.get("prior_keys"), exposure=exposure, occupancy=occupancy,
+                   strides=tuple(strides), **{key: meta.get(key) for key in cls.META})
+
+
+def occupancy_arrays(prefix, o, **extra):
+    """The arrays of a checkpoint holding :class:`Occupancy` ``o`` (and ``extra`` arrays) under ``prefix``."""
+    return {f"{prefix}/{k}": v for k, v in
+            dict(cells=o.cells, lo=o.lo, hi=o.hi, reach=np.array(o.reach), **extra).items()}
+
+
+def occupancy_from(arrays, prefix):
+    """The :class:`Occupancy` that :func:`occupancy_arrays` saved under ``prefix``."""
+    return Occupancy(arrays[f"{prefix}/lo"], arrays[f"{prefix}/hi"], arrays[f"{prefix}/cells"],
+                     float(arrays[f"{prefix}/reach"]))

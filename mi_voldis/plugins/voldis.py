@@ -217,10 +217,19 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
                 levels.append((grid, level_step))
         return tuple(levels)
 
-    def use_occupancy(self, occupancy):
-        """Skip with a given :class:`Occupancy` grid (e.g. one restored from a checkpoint); None: off."""
-        self.occupancy, self._strides = occupancy, ()
+    def use_occupancy(self, occupancy, strides=()):
+        """Skip with a given :class:`Occupancy` grid and, with ``strides``, step through thin cells with given
+        levels (:attr:`stride_levels`; e.g. both restored from a checkpoint); None: off."""
+        if strides and not self.strides:
+            raise ValueError("voldis: stride levels given to an integrator without strides")
+        self.occupancy, self._strides = occupancy, tuple(strides) if occupancy is not None else ()
         self._plans.clear()
+
+    @property
+    def stride_levels(self):
+        """((occupancy, step), ...) of the strides in use (:meth:`_stride_levels`): what a checkpoint keeps,
+        as the fields they were built from have changed since."""
+        return self._strides
 
     def scene_bounds(self):
         """Scene-space axis-aligned bounds of every density-carrying box (after transforms)."""
