@@ -296,7 +296,7 @@ def test_a_contracted_fit_whose_rays_would_pass_the_sample_cap_stays_on_the_grid
     assert abs(rendered["evaluated"].mean() - metrics["per_view"][0]["samples_per_ray"]) < 1e-6
     # fitting strided too (strides): the same fit without them evaluates more samples in its training steps
     out = str(tmp_path / "plain")
-    run_fit(tiny_dataset, out, FitConfig.from_sources(None, sets[:-1] + ["strides=false"]), progress=False)
+    run_fit(tiny_dataset, out, FitConfig.from_sources(None, sets[:-1] + ["strides=\"none\""]), progress=False)
     plain = json.load(open(os.path.join(out, "metrics.json")))
     assert metrics["train_samples_per_ray"] < 0.9 * plain["train_samples_per_ray"]
     assert abs(metrics["held_out"]["psnr"] - plain["held_out"]["psnr"]) < 0.5

@@ -73,7 +73,7 @@ class FitConfig(Settings):
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
              "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0, "fringe_contrast": 0.0,
              "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4, "scene_strides": False,
-             "strides": False}
+             "strides": "none"}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -254,8 +254,10 @@ class FitConfig(Settings):
                                            "the initial one, so only space the data carved out is skipped",
                                      above=0, high=1)
     occupancy_every: int = setting(100, "steps between occupancy updates", low=1)
-    strides: bool = setting(True, "fitting, in contracted space, crosses occupied cells of thin density in "
-                                  "longer steps (the voldis integrator's strides): fewer samples a step")
+    strides: str = setting("last", "in contracted space, the fit's stages cross occupied cells of thin density "
+                                   "in longer steps (the voldis integrator's strides): 'last' from the planned "
+                                   "last stage on (each refinement carves the field as sampled in full), 'all' "
+                                   "every stage, 'none'", choices=("last", "all", "none"))
     scene_occupancy_voxels: int = setting(1, "occupancy cells of the fitted scene (the scene.xml a run writes, "
                                              "scores and every task renders) are this many voxels across: "
                                              "cells of one voxel skip the empty air between a surface's voxels "

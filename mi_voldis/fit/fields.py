@@ -216,13 +216,21 @@ def scene_properties(inputs, state, **options):
 
 def fit_integrator(inputs, state, properties=None):
     """The ``voldis`` integrator over the current fields with ``properties`` (default
-    :func:`scene_properties` with fitting's ``strides``: no occupancy, fitting updates it itself)."""
+    :func:`scene_properties` with fitting's strides (:func:`fit_strides`): no occupancy, fitting updates it itself)."""
     full = state.fields["full"]
     bg = state.fields.get("bg")
     # the full phase of "refit": an empty stand-in background over the same box
     bg = bg.plugin() if bg is not None else constant_field(1e-12, (0.0, 0.0, 0.0), full.to_world)
-    properties = properties or scene_properties(inputs, state, strides=curved_strides(inputs, inputs.cfg.strides))
+    strides = curved_strides(inputs, fit_strides(inputs, state))
+    properties = properties or scene_properties(inputs, state, strides=strides)
     return build_integrator({"full": full.plugin(), "bg": bg}, properties)
+
+
+def fit_strides(inputs, state):
+    """Whether fitting strides now (``strides``): at every stage, or from the planned last one on."""
+    which = inputs.cfg.strides
+    last = state.steps_full is not None and max(state.fields["full"].shape) >= state.schedule[-1][1]
+    return which == "all" or (which == "last" and last)
 
 
 def curved_strides(inputs, on):
