@@ -401,3 +401,11 @@ def test_a_grid_file_with_an_inverted_or_flat_box_is_refused_naming_it(tmp_path,
         mi.load_dict({"type": "radiance_field", "density": str(tmp_path / "density.vol"),
                       "color": str(tmp_path / "color.vol")})
     assert f"{tmp_path / 'density.vol'}: the grid's box needs min < max on every axis, got {shown}" in str(e.value)
+
+
+def test_spread_picks_views_evenly_from_first_to_last():
+    from mi_voldis.data.types import spread
+    assert spread(10, 3).tolist() == [0, 4, 9]  # (n - 1) / (count - 1) = 4.5 apart, rounded
+    assert spread(24, 8).tolist() == [0, 3, 7, 10, 13, 16, 20, 23]
+    assert spread(3, 10).tolist() == [0, 1, 2]  # all of them when fewer than asked
+    assert spread(5, 1).tolist() == [0] and spread(5, 0).tolist() == []

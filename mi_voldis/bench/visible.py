@@ -7,6 +7,7 @@ field puts it: its depth along the pixel's ray.
 """
 import numpy as np
 
+from ..data.types import spread
 from ..fit.hull import visual_hull
 from ..fit.visibility import pixel_points, seen_elsewhere
 from ..metrics import dilate
@@ -17,7 +18,7 @@ def training_surfaces(ds, integrator, count=24):
     """Median depth maps of the full field for up to ``count`` masked training views spread over the set
     (NaN where a ray ends on nothing), keyed by view."""
     views = list(ds.masked_train)
-    pick = np.unique(np.linspace(0, len(views) - 1, min(count, len(views))).round().astype(int))
+    pick = spread(len(views), count)
     out = {}
     for v in (views[k] for k in pick):
         depth, hit = median_depth(integrator, ds.cameras[v])

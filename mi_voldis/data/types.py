@@ -7,6 +7,12 @@ from ..cameras import Camera
 from ..space import SceneBox
 
 
+def spread(n, count):
+    """Indices of up to ``count`` of ``n`` items (views), spread evenly from the first to the last: all of
+    them when ``count`` >= ``n``."""
+    return np.unique(np.linspace(0, n - 1, min(count, n)).round().astype(int))
+
+
 class DatasetError(ValueError):
     """A dataset file is missing, unreadable or inconsistent; the message names the file."""
 

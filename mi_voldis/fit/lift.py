@@ -19,6 +19,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..cameras import pixel_rays
+from ..data.types import spread
 from ..device import from_numpy
 from ..field.activations import logit
 from ..field.state import density_raw_for_alpha, resample
@@ -159,7 +160,7 @@ def training_depths(inputs, state, count=24, extra=(), median=False, memo=None):
     is, the steps that start the background each ask for these renders)."""
     ds = inputs.ds
     train = list(ds.train)
-    pick = np.unique(np.linspace(0, len(train) - 1, min(count, len(train))).round().astype(int))
+    pick = spread(len(train), count)
     views = sorted(set(train[k] for k in pick) | set(extra))
     integrator = fit_integrator(inputs, state)
     memo = {} if memo is None or not median else memo

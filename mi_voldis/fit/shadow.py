@@ -50,6 +50,7 @@ import cv2
 import numpy as np
 
 from ..cameras import pixel_rays
+from ..data.types import spread
 from ..io.images import srgb_to_linear
 from ..metrics import diagonal_pixels, dilate
 from .hull import visual_hull
@@ -425,7 +426,7 @@ def shadow_of_depths(ds, cfg, depth, views=12):
     surface = surface.inside(visual_hull(surface.points, cams, masks, grow, cfg.hull_min_views, depths))
     if len(surface.points) < 16:
         return None, None
-    pick = np.unique(np.linspace(0, len(masked) - 1, min(views, len(masked))).round().astype(int))
+    pick = spread(len(masked), views)
     scored = ShadowViews.of([cams[k] for k in pick], [ds.images[masked[k]] for k in pick], [masks[k] for k in pick],
                             [depths[k] for k in pick], MASK_EDGE_PX)
     light, occluder = find_light(scored, surface, cfg.shadow_contrast, seed=cfg.seed)

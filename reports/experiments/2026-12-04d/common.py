@@ -3,10 +3,10 @@
 ``fitted_run(argv)``: argv = RUN [--views N] [rest...] -> (run, dataset, views, grid side, rest): up to N
 held-out views spread evenly over them (all without --views). Also selects the llvm_ad_rgb variant."""
 import mitsuba as mi
-import numpy as np
 
 mi.set_variant("llvm_ad_rgb")
 
+from mi_voldis.data.types import spread  # noqa: E402
 from mi_voldis.tasks.base import FittedRun  # noqa: E402
 
 
@@ -21,5 +21,5 @@ def fitted_run(argv):
     ds = run.dataset
     views = list(ds.test)
     if nviews and len(views) > nviews:
-        views = [views[i] for i in np.linspace(0, len(views) - 1, nviews).round().astype(int)]
+        views = [views[i] for i in spread(len(views), nviews)]
     return run, ds, views, max(run.fields["full"].shape), args[1:]

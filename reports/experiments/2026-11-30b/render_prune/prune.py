@@ -16,6 +16,7 @@ mi.set_variant("llvm_ad_rgb")
 import drjit as dr  # noqa: E402
 
 from mi_voldis.cameras import pixel_rays  # noqa: E402
+from mi_voldis.data.types import spread  # noqa: E402
 from mi_voldis.device import from_numpy  # noqa: E402
 from mi_voldis.metrics import psnr  # noqa: E402
 from mi_voldis.render.rays import render_rays  # noqa: E402
@@ -49,7 +50,7 @@ run = FittedRun(args[0])
 ds = run.dataset
 tests = list(ds.test)
 if nviews and len(tests) > nviews:
-    tests = [tests[i] for i in np.linspace(0, len(tests) - 1, nviews).round().astype(int)]
+    tests = [tests[i] for i in spread(len(tests), nviews)]
 res = max(run.fields["full"].shape)
 base_thr = run.properties["occupancy_threshold"]
 base_cells = int(round((res - 1) / max(run.properties["occupancy_resolution"], 1)))
