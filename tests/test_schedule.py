@@ -225,6 +225,42 @@ def test_a_budgeted_fit_plans_from_the_capture_and_reports_its_plan(tiny_dataset
     assert np.isfinite(metrics["held_out"]["psnr"])
 
 
+def test_a_default_fit_counts_its_last_stage_and_fills_its_budget_by_the_count(tiny_dataset, tmp_path):
+    """minutes 'auto' in a real fit: from REPLAN_EVERY steps into the last stage on, every replan costs a
+    step by the median samples and stored floats its log counts there (past their first fifth), at the
+    reference rates the plan recorded, and the steps ahead fill what the budget leaves: the fit ends where
+    its last count says."""
+    from mi_voldis.fit.schedule import REPLAN_EVERY, cost_ahead, counted_step_seconds, plan_cost
+    out = tmp_path / "run"
+    sets = ["calibration_steps=20", "coarse_resolution=8", "resolution=16", "batch_rays=256", "steps_bg=2",
+            "sh_degree=0", "eval_every=1000", "occupancy_at_step=10", "min_steps=250", "stages=2",
+            "stage_starts=[0.2]", "reference_msps=0.004", "sample_ns=5e4", "float_ns=1"]
+    # rates of a slow reference machine: the tiny capture's budget (1.5 minutes) buys a few hundred steps
+    done = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "train.py"), tiny_dataset, "--out", str(out),
+                           "--quiet"] + [x for s in sets for x in ("--set", s)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    schedule = json.load(open(out / "metrics.json"))["schedule"]
+    plan, steps = schedule["plan"], schedule["steps_full"]
+    start = schedule["stages"][-1][0]
+    counted = plan["recounted"]  # the last count: at the last replan before the end
+    assert counted["step"] % REPLAN_EVERY == 0 and steps - REPLAN_EVERY <= counted["step"] < steps
+    rows = [r for r in json.load(open(out / "log.json")) if start < r["step"] <= counted["step"] and "psnr" in r]
+    rows = rows[len(rows) // 5:]
+    assert all(r["floats"] > 0 for r in rows)
+    seconds = counted_step_seconds(plan, np.median([r["samples"] for r in rows]),
+                                   np.median([r["floats"] for r in rows]))
+    assert counted["step_seconds"] == pytest.approx(seconds)
+    before = plan["rescaled"]
+    assert plan["rescaled"][-1][1] == steps
+    cost = plan_cost(plan, 8)
+    stages_ = schedule["stages"]
+    spent = cost_ahead(stages_, steps, 0, cost) - cost_ahead(stages_, steps, start, cost) + \
+        (counted["step"] - start) * seconds
+    assert steps == counted["step"] + int((plan["budget_seconds"] - spent) / seconds) > 250, before
+    log = json.load(open(out / "log.json"))
+    assert [r["step"] for r in log if "psnr" in r][-1] == steps
+
+
 def test_a_fit_whose_carved_grid_would_outgrow_the_memory_stays_on_the_grid_it_has(tiny_dataset, tmp_path,
                                                                                       monkeypatch):
     """With no memory for a single vertex more, every later stage is capped at the coarse grid: the run
@@ -390,12 +426,14 @@ def planned(cfg, state, masks=None):
 
 
 PLANS = {}  # load -> (schedule, steps) of the parametrised test below
+COUNTED = {}  # load -> its steps once the last stage is counted
 
 
 @pytest.mark.parametrize("load", [1.0, 3.0, 0.2])
 def test_the_default_plan_is_costed_at_the_reference_speed_whatever_the_machine(load):
     """minutes 'auto': a coarse step costs its samples over reference_msps, however long it took here;
-    the budget decides the steps, min_steps their floor, and nothing is re-timed while the fit runs."""
+    the budget decides the steps, min_steps their floor, and nothing is re-timed while the fit runs: the
+    last stage is costed from the samples and floats its steps count."""
     cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=500)
     samples = 0.01 * cfg.reference_msps * 1e6  # 0.01 s a coarse step at the reference speed
     state = planned(cfg, calibrated(0.01 * load, samples))
@@ -404,13 +442,34 @@ def test_the_default_plan_is_costed_at_the_reference_speed_whatever_the_machine(
     assert state.steps_full == max(steps_for(stages(cfg, 64, 256), default_step(cfg), budget), 500)
     PLANS[load] = (state.schedule, state.steps_full)
     assert PLANS[load] == PLANS.get(1.0, PLANS[load])  # a faster or slower machine plans the same fit
+    from mi_voldis.fit.schedule import cost_ahead, plan_cost
     from mi_voldis.fit.train import replan
     before = (list(state.schedule), state.steps_full)
-    state.log += [{"step": s, "step_seconds": 1.0, "time": 1000.0, "samples": samples}
-                  for s in range(len(state.log) + 1, state.schedule[-1][0] + 101)]
-    for step in (300, state.schedule[-1][0], state.schedule[-1][0] + 100):
+    start = state.schedule[-1][0]
+    floats = 3e6
+    state.log += [{"step": s, "step_seconds": load, "time": 1000.0 * load, "samples": samples, "floats": floats}
+                  for s in range(len(state.log) + 1, start + 101)]
+    for step in (300, start, start + 50):  # before the last stage, or too few of its steps: nothing changes
         replan(state, step)
     assert (state.schedule, state.steps_full) == before and "rescaled" not in state.plan
+    # REPLAN_EVERY steps into the last stage its steps are costed from what they count, not timed
+    replan(state, start + 100)
+    seconds = (samples * state.plan["sample_ns"] + floats * state.plan["float_ns"]) * 1e-9
+    assert state.plan["recounted"] == {"step": start + 100, "step_seconds": pytest.approx(seconds)}
+    cost = plan_cost(state.plan, 64)
+    spent = cost_ahead(before[0], before[1], 0, cost) - cost_ahead(before[0], before[1], start, cost) + 100 * seconds
+    assert state.steps_full == max(start + 100 + int((state.plan["budget_seconds"] - spent) / seconds), 500)
+    assert state.schedule == before[0]
+    COUNTED[load] = state.steps_full
+    assert COUNTED[load] == COUNTED.get(1.0, COUNTED[load])  # a faster or slower machine counts the same
+    after = state.steps_full
+    replan(state, start + 200)  # the same counts: the end stays
+    assert state.steps_full == after and len(state.plan["rescaled"]) == 1
+    state.log += [dict(r, step=s, samples=4 * samples) for s, r in
+                  zip(range(start + 101, start + 501), [state.log[-1]] * 400)]
+    replan(state, start + 500)  # steps that now count more samples: fewer of them fit the budget
+    assert state.plan["recounted"]["step"] == start + 500 and state.plan["recounted"]["step_seconds"] > seconds
+    assert state.steps_full < after or state.steps_full == 500
 
 
 def test_a_default_plan_capped_by_memory_spends_the_seconds_it_saves_on_steps_at_the_cap():
@@ -448,6 +507,30 @@ def test_the_default_resolution_is_the_finest_the_reference_speed_affords(monkey
         budget = state.plan["budget_seconds"] - cfg.calibration_steps * 0.01
         assert state.plan["final_resolution"] == affordable_resolution(cfg, default_step(cfg), budget, SURVEY,
                                                                        4 * 100 * 100) < 1024
+
+
+def test_a_large_captures_extra_minutes_buy_steps_on_the_grid_ten_minutes_pick(monkeypatch):
+    """Past the llvm bound's 12 Mpx the budget grows (here to 15 minutes), but the grid is the one the
+    10-minute budget affords: the extra minutes buy steps on it."""
+    from types import SimpleNamespace
+
+    import mi_voldis.fit.train as train
+    monkeypatch.setattr(train, "capture_survey", lambda *a: SURVEY)
+    monkeypatch.setattr(train, "backend", lambda: "llvm")
+    cfg = FitConfig().for_backend("llvm").replace(min_steps=0, max_memory_gib=1e4)
+    samples = 0.01 * cfg.reference_msps * 1e6
+    plans = {}
+    for views in (60, 400):  # 12 Mpx: 10 minutes; 80 Mpx: 15
+        ds = SimpleNamespace(train=list(range(views)), size=(500, 400), masks=None)
+        state = calibrated(0.01, samples)
+        train.plan_schedule(SimpleNamespace(cfg=cfg, ds=ds, bank=SimpleNamespace(pixels=PIXELS)), state, None)
+        plans[views] = state
+    small, large = plans[60], plans[400]
+    assert small.plan["minutes"] == 10.0 and "grid_minutes" not in small.plan
+    assert large.plan["minutes"] == 15.0 and large.plan["grid_minutes"] == 10.0
+    assert large.plan["final_resolution"] == small.plan["final_resolution"] < SURVEY["capture_resolution"]
+    assert large.plan["step_voxels"] == small.plan["step_voxels"]
+    assert large.steps_full == pytest.approx(small.steps_full * 15 / 10, rel=0.01)
 
 
 def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked():
@@ -512,8 +595,13 @@ def test_the_default_plan_follows_the_backend(monkeypatch):
 
     import mi_voldis.fit.train as train
     from mi_voldis.fit.schedule import BACKENDS, auto_minutes
-    big = SimpleNamespace(train=list(range(100)), size=(500, 400))  # 20 Mpx
+    big = SimpleNamespace(train=list(range(60)), size=(500, 400))  # 12 Mpx
     assert auto_minutes(big, "llvm") == 10.0 and auto_minutes(big, "cuda") == 5.0
+    # past 12 Mpx the llvm bound grows as the cube root of the pixels, at most 15 minutes; cuda's stays
+    bigger = SimpleNamespace(train=list(range(180)), size=(500, 400))  # 36 Mpx
+    assert auto_minutes(bigger, "llvm") == pytest.approx(10.0 * 3 ** (1 / 3)) and auto_minutes(bigger, "cuda") == 5.0
+    huge = SimpleNamespace(train=list(range(1000)), size=(500, 400))
+    assert auto_minutes(huge, "llvm") == 15.0
     small = SimpleNamespace(train=list(range(4)), size=(100, 100))
     assert auto_minutes(small, "llvm") == 1.5 and auto_minutes(small, "cuda") == 1.0
     plans = {}

@@ -52,6 +52,13 @@ def _auto_or(whole, low=None, above=None):
     return error
 
 
+def _null_or(check):
+    """``check`` that also takes null."""
+    def error(value):
+        return None if value is None else (None if check(value) is None else f"null or {check(value)}")
+    return error
+
+
 def _fractions_error(value):
     if isinstance(value, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value) \
             and all(0 < v < 1 for v in value) and all(a < b for a, b in zip(value, value[1:])):
@@ -66,14 +73,15 @@ class FitConfig(Settings):
     # stepped with the then default rates and TV weights, and filled the hull isotropically; degree-1 colour
     # before sh_color was RGB; backgrounds before fringe_contrast kept the dark fringe; scenes before
     # scene_occupancy_voxels / scene_stop_transmittance / scene_strides were written with fitting's cells,
-    # stop and steps; fits before strides marched every occupied cell at the fit's step
+    # stop and steps; fits before strides marched every occupied cell at the fit's step; default plans before
+    # sample_ns did not count their last stage
     ADDED = {"sh_color": "rgb", "host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4,
              "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
              "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0, "fringe_contrast": 0.0,
              "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4, "scene_strides": False,
-             "strides": "none"}
+             "strides": "none", "sample_ns": None, "float_ns": 0.0}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -91,7 +99,9 @@ class FitConfig(Settings):
     # ---- schedule: coarse to fine, as data (mi_voldis/fit/schedule.py derives what is left null / 'auto')
     minutes: float | str | None = setting("auto", "time budget of the fit: the number of steps is chosen to fill "
                                                   "it ('auto': 2.5 min per million training pixels, 1.5 to 10, "
-                                                  "costed at reference_msps, and min_steps at least; a number: "
+                                                  "the 10 growing as the cube root of the pixels past 12 M, at "
+                                                  "most 15 (on cuda 0.5 min, 1 to 5), costed at reference_msps, "
+                                                  "and min_steps at least; a number: "
                                                   "minutes of this machine's wall clock; null: steps_full)",
                                         check=_minutes_error)
     reference_msps: float | str = setting("auto", "with minutes 'auto', the coarse stage's kernel speed the plan "
@@ -103,6 +113,15 @@ class FitConfig(Settings):
     host_ms: float | str = setting("auto", "milliseconds a training step costs whatever its size (tracing, launches, "
                                            "reading the loss back), added to its kernels' time in the plan ('auto': "
                                            "the backend's, 0 on llvm, 5 on cuda)", check=_auto_or(False, low=0))
+    sample_ns: float | str | None = setting("auto", "with minutes 'auto', the nanoseconds a step of the last stage "
+                                                     "costs per evaluated training sample, its steps counted from "
+                                                     "the 100th on ('auto': the backend's, mi_voldis.fit.schedule."
+                                                     "BACKENDS: 168 on llvm, 1.05 on cuda; null: the stage is not "
+                                                     "counted, its steps stay as modelled from the coarse one)",
+                                            check=_null_or(_auto_or(False, above=0)))
+    float_ns: float | str = setting("auto", "with minutes 'auto', the nanoseconds a step of the last stage costs per "
+                                             "stored float of the fields it steps ('auto': the backend's, 1.86 on "
+                                             "llvm, 0 on cuda)", check=_auto_or(False, low=0))
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
     min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
                                    "overrunning the budget where it allows fewer (the resolution is chosen "
@@ -395,8 +414,9 @@ class FitConfig(Settings):
         """These settings with what is 'auto' per backend (``which``: 'llvm' or 'cuda') made explicit."""
         from .schedule import BACKENDS
         b = BACKENDS[which]
-        return self.replace(**{key: getattr(b, key) for key in ("reference_msps", "host_ms", "batch_rays",
-                                                                 "max_memory_gib") if getattr(self, key) == "auto"})
+        return self.replace(**{key: getattr(b, key) for key in ("reference_msps", "host_ms", "sample_ns", "float_ns",
+                                                                 "batch_rays", "max_memory_gib")
+                               if getattr(self, key) == "auto"})
 
     def check(self):
         if self.minutes is None and self.steps_full is None:

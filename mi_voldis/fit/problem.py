@@ -215,7 +215,9 @@ class FieldFit:
                           distortion=distortion, near_grad=self.near_grad)
         behind = backdrop(self.inputs.ds, rng, n)
         loss = mi.Float(0.0)
-        stats = {"samples": float(dr.sum(out["evaluated"])[0])}
+        # what the step's cost counts (mi_voldis.fit.schedule.counted_step_seconds): its samples, the floats it steps
+        stats = {"samples": float(dr.sum(out["evaluated"])[0]),
+                 "floats": float(sum(dr.width(self.integrator.fields[r].packed) for r in self.roles))}
         extent = float(np.max(self.state.hi - self.state.lo))  # ray positions in units of the scene box
         for layer in distortion:
             loss += (cfg.distortion / extent) * distortion_loss(out["distortion"][layer], mask, cfg.distortion_object)

@@ -32,7 +32,13 @@ derived from the capture and the time budget once the first, coarse stage has ru
   steps on every machine of a backend, loaded or idle, fast or slow, and a resumed fit ends where an
   uninterrupted one would; the fit then runs at least ``min_steps`` steps (a small capture's budget
   buys fewer: the extra steps go to the grid the budget picked, as a grid seen too few times stays
-  hazy, not to a finer one);
+  hazy, not to a finer one). Its last stage is costed again every ``REPLAN_EVERY`` steps from its
+  100th on, from what its steps count: their samples (after the strides, the occupancy) and the stored
+  floats they step, at the backend's reference rates (:func:`counted_step_seconds`,
+  :func:`last_stage_steps`; :func:`mi_voldis.fit.train.recount`), as the coarse stage's model cannot
+  know how many samples the strides save or how many vertices the carve keeps. A capture past the
+  backend's bound of minutes gets more (:func:`auto_minutes`), which buy steps on the grid the bound's
+  budget picks, not a finer one;
 * a budget given in minutes is this machine's wall clock: the seconds per step are timed, and at the
   start of every later stage and every ``REPLAN_EVERY`` steps the steps still to come are rescaled to
   the budget that is left (:func:`rescale`), with the seconds a step took in the stage just finished or
@@ -55,26 +61,40 @@ RESERVED_NO_BACKGROUND = 0.05
 @dataclass(frozen=True)
 class Backend:
     """What the default plan assumes of a Dr.Jit backend: the coarse stage's kernel speed (M samples/s)
-    and the host's fixed milliseconds per step (:class:`StepCost`), the budget per million training
-    pixels and its bounds (minutes), the rays of a step and the memory a fit may take (GiB)."""
+    and the host's fixed milliseconds per step (:class:`StepCost`); the seconds a step of the last stage
+    takes per evaluated training sample and per stored float of the fields it steps (ns,
+    :func:`counted_step_seconds`); the budget per million training pixels and its bounds (minutes), the
+    bound growing past ``growth_mpx`` million pixels (None: never) up to ``max_minutes``
+    (:func:`auto_minutes`); the rays of a step and the memory a fit may take (GiB)."""
     reference_msps: float
     host_ms: float
+    sample_ns: float
+    float_ns: float
     minutes_per_mpx: float
     minutes: tuple
+    growth_mpx: float | None
+    max_minutes: float
     batch_rays: int
     max_memory_gib: float
 
 
 # llvm: the project's 2-core machine, idle (the 64^3 calibration steps: tabletop 18.4, random 4 17.9, fern 16.4,
 # statue 18.2, garden 20.0, horns 14.7 M samples/s; reports/notes.md), where the kernels are the step; 4 GiB of
-# RAM (issue #42's bound). cuda: one H200 (reports/gpu.md): a fit's step took 4.9-5.1 ms plus 1.0-1.1 ms per
-# million samples, fern, the statue and garden alike, from 1 M to 4 M samples a step, so its host's share is
-# fixed and its kernels run about 1000 M samples/s; 32 GiB of the card's memory (an H100 has 80).
+# RAM (issue #42's bound). Its last stages: a step's seconds over its samples S and the floats F it steps, fitted
+# to the four captures' default fits (fern, horns, the statue, garden: 0.43-0.96 M samples, 34-54 M floats,
+# 0.155-0.212 s a step with the evaluations and checkpoints) and taken 5% above the fit, so that no capture's
+# step is costed below what it took (reports/notes.md, "The last stage costed from what it counts"). Captures
+# past 12 M training pixels (garden: 42 M) get more than 10 minutes, as issue #42's time targets do (10
+# minutes for fern, horns and the statue, 3-10 M pixels, 15 for garden). cuda: one H200 (reports/gpu.md): a
+# fit's step took 4.9-5.1 ms plus 1.0-1.1 ms per million samples, fern, the statue and garden alike, from 1 M
+# to 4 M samples a step, so its host's share is fixed and its kernels run about 1000 M samples/s, its vertices
+# not apart from them; 32 GiB of the card's memory (an H100 has 80); its budget's bound not grown (no GPU has
+# run a capture past 12 M pixels under it).
 BACKENDS = {
-    "llvm": Backend(reference_msps=18.0, host_ms=0.0, minutes_per_mpx=2.5, minutes=(1.5, 10.0), batch_rays=8192,
-                    max_memory_gib=4.0),
-    "cuda": Backend(reference_msps=1000.0, host_ms=5.0, minutes_per_mpx=0.5, minutes=(1.0, 5.0), batch_rays=32768,
-                    max_memory_gib=32.0),
+    "llvm": Backend(reference_msps=18.0, host_ms=0.0, sample_ns=168.0, float_ns=1.86, minutes_per_mpx=2.5,
+                    minutes=(1.5, 10.0), growth_mpx=12.0, max_minutes=15.0, batch_rays=8192, max_memory_gib=4.0),
+    "cuda": Backend(reference_msps=1000.0, host_ms=5.0, sample_ns=1.05, float_ns=0.0, minutes_per_mpx=0.5,
+                    minutes=(1.0, 5.0), growth_mpx=None, max_minutes=5.0, batch_rays=32768, max_memory_gib=32.0),
 }
 
 
@@ -138,12 +158,18 @@ def reserved(background):
     return RESERVED if background else RESERVED_NO_BACKGROUND
 
 
-def auto_minutes(dataset, which="llvm"):
+def auto_minutes(dataset, which="llvm", grow=True):
     """Default budget of a dataset on backend ``which``: its minutes per million training pixels, within
-    its bounds (llvm: 2.5, between 1.5 and 10)."""
+    its bounds (llvm: 2.5, between 1.5 and 10), with ``grow`` the upper bound grown as the cube root of the
+    pixels past ``growth_mpx`` million, at most ``max_minutes`` (llvm: 10 (P / 12)^(1/3), at most 15). The
+    minutes past the bound buy steps, not a finer grid (:func:`mi_voldis.fit.train.plan_schedule` picks
+    the grid with ``grow`` false)."""
     b = BACKENDS[which]
     pixels = len(dataset.train) * dataset.size[0] * dataset.size[1] / 1e6
-    return float(np.clip(b.minutes_per_mpx * pixels, *b.minutes))
+    high = b.minutes[1]
+    if grow and b.growth_mpx is not None and pixels > b.growth_mpx:
+        high = min(b.max_minutes, high * (pixels / b.growth_mpx) ** (1 / 3))
+    return float(np.clip(b.minutes_per_mpx * pixels, b.minutes[0], high))
 
 
 def capture_survey(inputs, integrator, state, rays=1 << 16):
@@ -428,6 +454,21 @@ def rescale_after_cap(schedule, steps_full, step, cap, cost, budget):
     out = capped(schedule, cap, step)
     ahead, end = rescale(out, steps_full, step, cost, left)
     return (ahead, end) if end > steps_full else (out, steps_full)
+
+
+def counted_step_seconds(plan, samples, floats):
+    """Seconds of a training step that evaluates ``samples`` samples and steps fields of ``floats`` stored
+    floats, at the reference rates the default ``plan`` recorded (``host_ms``, ``sample_ns``, ``float_ns``:
+    :data:`BACKENDS`):
+
+        host + samples sample_ns + floats float_ns"""
+    return plan.get("host_ms", 0.0) / 1e3 + (samples * plan["sample_ns"] + floats * plan["float_ns"]) * 1e-9
+
+
+def last_stage_steps(step, seconds, budget_left, min_steps):
+    """``steps_full`` of a plan whose last stage, from ``step`` on, takes ``seconds`` a step: as many as
+    ``budget_left`` buys, at least ``min_steps`` in all and one more than ``step``."""
+    return max(step + max(int(max(budget_left, 0.0) / seconds), 1), int(min_steps))
 
 
 def plan_cost(plan, coarse):

@@ -73,6 +73,7 @@ from .hull import check_hull
 from .lift import keys_mask, lift_prior
 from .problem import FieldFit
 from .schedule import (
+    REPLAN_EVERY,
     StepCost,
     auto_minutes,
     backend,
@@ -81,7 +82,9 @@ from .schedule import (
     choose_step,
     coarse_resolution,
     cost_ahead,
+    counted_step_seconds,
     degree_cost_scale,
+    last_stage_steps,
     memory_resolution,
     plan_cost,
     rescale,
@@ -332,11 +335,15 @@ def cap_for_sh_degree(inputs, state, degree, step):
 
 def replan(state, step):
     """With a wall-clock budget (``minutes`` given), rescale the steps from ``step`` to the budget left
-    (:func:`rescale`), timed on the stage just finished (at a stage start) or on the one running;
-    explicit step counts and the default plan (costed at the reference speed) stay."""
+    (:func:`rescale`), timed on the stage just finished (at a stage start) or on the one running; the
+    default plan (costed at the reference speed) has its last stage costed from what its steps count
+    (:func:`recount`); explicit step counts stay."""
     plan = state.plan or {}
     budget = plan.get("budget_seconds")
-    if budget is None or "reference_msps" in plan or step >= state.steps_full:
+    if budget is None or step >= state.steps_full:
+        return
+    if "reference_msps" in plan:
+        recount(state, step)
         return
     k = max(i for i, (start, _) in enumerate(state.schedule) if start <= step)
     timed = k - 1 if state.schedule[k][0] == step else k  # the stage whose steps are timed
@@ -354,6 +361,37 @@ def replan(state, step):
     state.schedule, state.steps_full = rescale(state.schedule, state.steps_full, step, cost,
                                                budget - state.log[-1]["time"])
     state.plan.setdefault("rescaled", []).append([step, state.steps_full])
+
+
+def recount(state, step):
+    """The default plan's last stage (after the coarse one, which the plan costed from its counted samples
+    already) costed from what its steps count, at every replan from REPLAN_EVERY steps into it on: the
+    median samples and stored floats of its steps so far (past their first fifth) at the reference rates
+    (:func:`~mi_voldis.fit.schedule.counted_step_seconds`), where the plan modelled the stage from the
+    coarse one (its R^COST_EXPONENT growth misses what the stage's strides save and how many vertices its
+    carve keeps). The steps ahead then fill what the full phase's budget leaves after the steps before the
+    stage (costed as planned) and those of it so far (as counted), at least ``min_steps`` in all
+    (:func:`~mi_voldis.fit.schedule.last_stage_steps`): while the counts hold, the end stays where it is.
+    Counted, not timed: the same on every machine, and a resumed fit counts what the uninterrupted one did
+    (the log is in its checkpoint)."""
+    plan = state.plan
+    start = state.schedule[-1][0]
+    if plan.get("sample_ns") is None or len(state.schedule) < 2 or step - start < REPLAN_EVERY:
+        return
+    rows = [r for r in state.log if start < r["step"] <= step and "floats" in r and "test_psnr" not in r]
+    rows = rows[len(rows) // 5:]
+    if len(rows) < 10:
+        return
+    seconds = counted_step_seconds(plan, float(np.median([r["samples"] for r in rows])),
+                                   float(np.median([r["floats"] for r in rows])))
+    cost = plan_cost(plan, state.schedule[0][1])
+    spent = cost_ahead(state.schedule, state.steps_full, 0, cost) - cost_ahead(state.schedule, state.steps_full, start,
+                                                                                cost) + (step - start) * seconds
+    steps = last_stage_steps(step, seconds, plan["budget_seconds"] - spent, plan.get("min_steps", 0))
+    plan["recounted"] = {"step": step, "step_seconds": seconds}
+    if steps != state.steps_full:
+        state.steps_full = steps
+        plan.setdefault("rescaled", []).append([step, steps])
 
 
 def plan_schedule(inputs, state, integrator):
@@ -377,22 +415,30 @@ def plan_schedule(inputs, state, integrator):
             kernels = float(np.median([r["samples"] for r in rows])) / (cfg.reference_msps * 1e6)
             cost = StepCost(kernels, coarse, host)
             spent = cfg.calibration_steps * float(cost.at(coarse))
-            state.plan.update(min_steps=cfg.min_steps, reference_msps=cfg.reference_msps)
+            state.plan.update(min_steps=cfg.min_steps, reference_msps=cfg.reference_msps, sample_ns=cfg.sample_ns,
+                              float_ns=cfg.float_ns)
         else:  # this machine's wall clock, re-timed as the fit runs (:func:`replan`)
             cost = StepCost.timed(float(np.median([r["step_seconds"] for r in rows])), coarse, host)
             spent = state.log[-1]["time"] if state.log else 0.0
         full_share = 1.0 - reserved(refits_background(inputs))
         budget = minutes * 60.0 * full_share - spent
+        # the minutes a large capture gets past the backend's bound buy steps on the grid the bound's budget
+        # picks, not a finer one: such a capture lacks observations (garden's 42 M pixels are each seen 0.6
+        # times in 3,000 steps), and more steps on its grid is what gained there (reports/notes.md)
+        grid_minutes = auto_minutes(inputs.ds, backend(), grow=False) if cfg.minutes == "auto" else minutes
+        grid_budget = grid_minutes * 60.0 * full_share - spent
         state.plan.update(minutes=float(minutes), coarse_step_seconds=float(cost.at(coarse)), host_ms=cfg.host_ms,
                           budget_seconds=minutes * 60.0 * full_share)
+        if grid_minutes != minutes:
+            state.plan["grid_minutes"] = float(grid_minutes)
         if view_lattice_vertices(cfg, cfg.sh_degree):  # the calibration's steps did not read the view lattice
             state.plan["kernel_scale"] = degree_cost_scale(cfg, cfg.sh_degree)
             cost = plan_cost(state.plan, coarse)
         if survey is not None and survey["surface_cells"]:
             if cfg.step_voxels == "auto":
-                state.plan["step_voxels"] = choose_step(cfg, cost, budget, survey, inputs.bank.pixels)
+                state.plan["step_voxels"] = choose_step(cfg, cost, grid_budget, survey, inputs.bank.pixels)
                 cost = cost.marching(state.plan["step_voxels"])
-            bounds = resolution_bounds(cfg, cost, budget, survey, inputs.bank.pixels)
+            bounds = resolution_bounds(cfg, cost, grid_budget, survey, inputs.bank.pixels)
             state.plan.update(resolution_bounds=bounds, affordable_resolution=min(bounds.values()))
             final = min(final, state.plan["affordable_resolution"])
     state.plan["final_resolution"] = int(final)

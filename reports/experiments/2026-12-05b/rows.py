@@ -2,6 +2,8 @@
 
     python reports/experiments/2026-12-05b/rows.py NAME=RUN [NAME=RUN ...]
 
+RUN: a run folder, or a metrics.json (a committed copy of one).
+
 Prints held-out PSNR and SSIM, the final grid, steps, samples a ray as the scene renders, the fit's seconds
 and peak RSS, and on how many held-out views the run beats the baseline (with the least and most change).
 """
@@ -13,7 +15,7 @@ import numpy as np
 
 
 def load(path):
-    with open(os.path.join(path, "metrics.json")) as f:
+    with open(path if path.endswith(".json") else os.path.join(path, "metrics.json")) as f:
         return json.load(f)
 
 
