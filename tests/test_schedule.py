@@ -533,6 +533,38 @@ def test_a_large_captures_extra_minutes_buy_steps_on_the_grid_ten_minutes_pick(m
     assert large.steps_full == pytest.approx(small.steps_full * 15 / 10, rel=0.01)
 
 
+def test_a_large_capture_at_the_floor_places_every_stage_over_the_steps_its_extra_minutes_buy(monkeypatch):
+    """A capture whose budget grew past the bound (15 minutes of the bound's 10) and whose plan sits at the
+    min_steps floor places its stages over min_steps x 15 / 10 steps, where its last stage will be
+    counted (the count then sets the end, at least min_steps); a capture within the bound, or one whose
+    count is off (sample_ns null), places them over min_steps."""
+    from types import SimpleNamespace
+
+    import mi_voldis.fit.train as train
+    from mi_voldis.fit.schedule import plan_cost
+    monkeypatch.setattr(train, "capture_survey", lambda *a: SURVEY)
+    monkeypatch.setattr(train, "backend", lambda: "llvm")
+    cfg = FitConfig().for_backend("llvm").replace(min_steps=20_000, max_memory_gib=1e4)
+    samples = 0.01 * cfg.reference_msps * 1e6
+
+    def plan(views, cfg):
+        ds = SimpleNamespace(train=list(range(views)), size=(500, 400), masks=None)
+        state = calibrated(0.01, samples)
+        train.plan_schedule(SimpleNamespace(cfg=cfg, ds=ds, bank=SimpleNamespace(pixels=PIXELS)), state, None)
+        return state
+
+    small, large, uncounted = plan(60, cfg), plan(400, cfg), plan(400, cfg.replace(sample_ns=None))
+    assert large.plan["minutes"] == 15.0 and large.plan["grid_minutes"] == 10.0
+    budgeted = steps_for(stages(cfg, 64, large.plan["final_resolution"]), plan_cost(large.plan, 64),
+                         large.plan["budget_seconds"] - cfg.calibration_steps * 0.01)
+    assert budgeted < 20_000  # the floor, not the budget, places the stages
+    assert small.steps_full == uncounted.steps_full == 20_000 and large.steps_full == 30_000
+    assert large.plan["min_steps"] == 20_000  # the end's floor stays: the count may end it below 30,000
+    later = [float(f) for f in cfg.stage_starts][1 - len(large.schedule):]  # the later stages' fractions
+    assert [s for s, _ in large.schedule] == [0] + [round(f * 30_000) for f in later]
+    assert [r for _, r in large.schedule] == [r for _, r in uncounted.schedule]
+
+
 def test_the_default_budget_runs_at_least_min_steps_on_the_grid_it_picked():
     cfg = FitConfig().for_backend("llvm").replace(resolution=256, min_steps=5000)
     state = planned(cfg, calibrated(0.5, 0.01 * cfg.reference_msps * 1e6))  # a slow machine changes nothing

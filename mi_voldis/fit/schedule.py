@@ -38,7 +38,8 @@ derived from the capture and the time budget once the first, coarse stage has ru
   :func:`last_stage_steps`; :func:`mi_voldis.fit.train.recount`), as the coarse stage's model cannot
   know how many samples the strides save or how many vertices the carve keeps. A capture past the
   backend's bound of minutes gets more (:func:`auto_minutes`), which buy steps on the grid the bound's
-  budget picks, not a finer one;
+  budget picks, not a finer one, at every stage: its stages are placed over ``min_steps`` times its
+  minutes over the bound's at least, and the count sets the end (:func:`mi_voldis.fit.train.stage_floor`);
 * a budget given in minutes is this machine's wall clock: the seconds per step are timed, and at the
   start of every later stage and every ``REPLAN_EVERY`` steps the steps still to come are rescaled to
   the budget that is left (:func:`rescale`), with the seconds a step took in the stage just finished or
