@@ -3,11 +3,14 @@ and the share of all samples taken by the rays past each percentile.
 
     python where.py RUN [--views N] STOP
 """
+import os
 import sys
 
 import drjit as dr
 import numpy as np
-from common import fitted_run
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "2026-12-04d"))
+from common import fitted_run  # noqa: E402  (2026-12-04d's: the run and its held-out views)
 
 from mi_voldis.render.views import render_camera
 
