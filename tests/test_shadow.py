@@ -179,6 +179,22 @@ def test_predicted_shading_follows_the_two_term_model():
     assert surface.predicted_shading(light, contrast, 0.05) > 2 * want
 
 
+def test_facing_is_the_cosine_to_the_light_bit_for_bit_as_row_sums_give_it():
+    """Analytic: a point at the origin with normal +z faces a light above it at cosine 1, one beside it
+    at 0, one below at -1, one at 45 degrees at 1/sqrt 2; a NaN normal gives NaN. On random points the
+    column sums give the very bits of NumPy's row sums (the light search's decisions do not move)."""
+    normals = np.array([[0.0, 0.0, 1.0]] * 4 + [[np.nan] * 3])
+    surface = ObjectSurface(np.zeros((5, 3)), normals, np.zeros(5), 0.01)
+    for light, want in (([0, 0, 2], 1.0), ([3, 0, 0], 0.0), ([0, 0, -1], -1.0), ([1, 0, 1], 0.5 ** 0.5)):
+        cos = surface.facing(light)
+        assert np.allclose(cos[:4], want, atol=1e-15) and np.isnan(cos[4])
+    rng = np.random.default_rng(3)
+    points, normals = rng.normal(size=(1000, 3)), rng.normal(size=(1000, 3))
+    light = np.array([0.3, 2.0, -1.1])
+    rows = np.sum((light - points) * normals, axis=1) / np.linalg.norm(light - points, axis=1)
+    assert np.array_equal(ObjectSurface(points, normals, np.zeros(1000), 0.01).facing(light), rows)
+
+
 def test_a_grazing_lights_shadow_the_objects_shading_cannot_match_is_not_kept(monkeypatch):
     """The floor darkened 4x where a light 10 degrees above it would shadow the sphere, the sphere lit
     by that light with half its light direct: log(1 + c) on its lit side, where a light that strong

@@ -281,9 +281,11 @@ class FitConfig(Settings):
                                              "scores and every task renders) are this many voxels across: "
                                              "cells of one voxel skip the empty air between a surface's voxels "
                                              "that fitting's coarser cells evaluate", low=1)
-    scene_stop_transmittance: float = setting(1e-3, "rays of the fitted scene stop once every field's "
-                                                    "transmittance falls below this (fitting: 1e-4): what "
-                                                    "lies behind changes a pixel by at most that much",
+    scene_stop_transmittance: float = setting(1e-2, "rays of the fitted scene stop once every field's "
+                                                    "transmittance falls below this (fitting: 1e-4), their "
+                                                    "last sample taking the light left: what lies behind "
+                                                    "changes a pixel by at most that much, times its "
+                                                    "difference from that sample's colour",
                                               above=0, high=0.5)
     scene_strides: bool = setting(True, "the fitted scene, in contracted space, crosses occupied cells of thin "
                                         "density in longer steps (the voldis integrator's strides)")

@@ -20,6 +20,8 @@ join the 2D hole, so the fill continues the surfaces behind the object, not the 
 (:func:`inpainting_hole`). The prior's weight applies on the grown mask alone, not on that ring.
 """
 import dataclasses
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -59,13 +61,21 @@ def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9, dept
     paint = inpainter(fill)
     state.prior = {**(state.prior or {}), "inpainter": inpainter_name(fill)}
     integrator = fit_integrator(inputs, state)
+    holes = {}
     for k, v in enumerate(train):
         if v not in masked:
             continue
         region[k] = dilate(ds.masks[v], grow) | (ds.effects[v] if ds.effects is not None else False)
         depth = view_depth(integrator, ds, v, depths)
-        hole = inpainting_hole(region[k], np.nan_to_num(depth), np.isfinite(depth), ds.masks[v], around, nearer)
-        images[k] = paint(np.clip(ds.images[v], 0, 1), hole)
+        holes[k] = inpainting_hole(region[k], np.nan_to_num(depth), np.isfinite(depth), ds.masks[v], around, nearer)
+    # the built-in inpainters are pure functions of their view, OpenCV's and NumPy's run without the GIL, and
+    # FSR is single-threaded (statue: 2.2 s a view): the views are painted on every core. A caller's own
+    # inpainter (a callable, say a learned model) is called one view at a time, as it may not be thread-safe.
+    workers = 1 if callable(fill) else min(len(holes), os.cpu_count() or 1) or 1
+    with ThreadPoolExecutor(workers) as pool:
+        painted = pool.map(lambda k: paint(np.clip(ds.images[train[k]], 0, 1), holes[k]), list(holes))
+        for k, image in zip(list(holes), painted):
+            images[k] = image
     inpainted = dataclasses.replace(ds, images=images, cameras=[ds.cameras[v] for v in train], masks=region,
                                     split=np.array(["train"] * len(train)), masked=None, effects=None,
                                     ignore=None if ds.ignore is None else ds.ignore[train])

@@ -45,6 +45,7 @@ The effect masks are then each training view's shadowed pixels, grown by ``GROW`
 point cloud's coarseness).
 """
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -294,6 +295,22 @@ class ObjectSurface:
         return cls(np.concatenate(pts), np.concatenate(nrm), np.concatenate(ell),
                    float(np.median(spacing)) if len(spacing) else 0.0)
 
+    @cached_property
+    def _columns(self):
+        """The points' and normals' coordinates as six contiguous arrays (:meth:`facing`)."""
+        return [np.ascontiguousarray(a[:, i]) for a in (self.points, self.normals) for i in range(3)]
+
+    def facing(self, light):
+        """Per point, the cosine between its normal and the direction to ``light``: (l - x) . n / |l - x|
+        (NaN where the normal is). Summed coordinate by coordinate in the order NumPy's row sums take, so
+        the same bits as those, eight times faster on the columns: the light search asks it of every
+        candidate (statue: 0.5 M points, 1,335 candidates)."""
+        px, py, pz, nx, ny, nz = self._columns
+        light = np.asarray(light, np.float64)
+        dx, dy, dz = light[0] - px, light[1] - py, light[2] - pz
+        with np.errstate(invalid="ignore"):
+            return (dx * nx + dy * ny + dz * nz) / np.sqrt(dx * dx + dy * dy + dz * dz)
+
     def inside(self, keep):
         """The points where ``keep`` (bool per point) holds."""
         return ObjectSurface(self.points[keep], self.normals[keep], self.ell[keep], self.spacing)
@@ -302,8 +319,7 @@ class ObjectSurface:
         """How much brighter (log luminance) the object is where it faces ``light`` than where it faces
         away (|cos| > ``FACING``; normals NaN at depth edges left out): a light that lights the
         object shades it so; a light no shadow came from need not."""
-        with np.errstate(invalid="ignore"):
-            cos = np.sum((light - self.points) * self.normals, axis=1) / np.linalg.norm(light - self.points, axis=1)
+        cos = self.facing(light)
         lit, dark = cos > FACING, cos < -FACING
         if min(lit.sum(), dark.sum()) < max(16, SIDE_SHARE * len(cos)):  # the views see too little of a side
             return 0.0
@@ -315,8 +331,7 @@ class ObjectSurface:
         (ambient + direct cos): k = (exp(contrast) - 1) / cos_r, then mean log(1 + k cos) over the
         points facing the light (the points facing away take ambient alone)."""
         k = np.expm1(max(contrast, 0.0)) / max(receiver_cos, MIN_RECEIVER_COS)
-        with np.errstate(invalid="ignore"):
-            cos = np.sum((light - self.points) * self.normals, axis=1) / np.linalg.norm(light - self.points, axis=1)
+        cos = self.facing(light)
         lit = cos > FACING
         return float(np.mean(np.log1p(k * cos[lit]))) if lit.any() else 0.0
 

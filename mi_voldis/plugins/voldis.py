@@ -74,8 +74,9 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
      * - stop_transmittance
        - |float|
        - A ray stops once every field's transmittance along it has fallen below this (early
-         termination): what lies behind changes the pixel by at most that much, times its colour.
-         (Default: 1e-4)
+         termination); its last sample takes the light left, so an opaque pixel's alpha is 1 and
+         what lies behind changes the pixel by at most that much, times its difference from the
+         last sample's colour. (Default: 1e-4)
      * - ndc_to_world, ndc_near, ndc_scale_x, ndc_scale_y
        - |transform|, |float|
        - Forward-facing scenes: sample and store the fields in the NDC space of this reference camera

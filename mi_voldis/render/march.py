@@ -32,6 +32,13 @@ With the adjoint dL the replay keeps rho = <dL, sum_{j>i} w_j g_j> per chain (in
 primal sums, decremented sample by sample) and back-propagates, per sample,
 ``<dL, w_i g_i> - rho x_i`` through the field lookups: its gradient is exactly the one above.
 
+A ray also stops early once every chain's optical depth reaches ``stop`` (transmittance below
+exp(-stop)); its last sample n then takes all the light left, w_n = exp(-sum_{j<n} x_j)
+(:func:`~mi_voldis.render.quadrature.weight_to_stop`), so an opaque surface's alpha is 1, not
+1 - exp(-stop). Then dL/dx_n = -sum_{j>n} w_j g_j = 0 and every earlier dL/dx_i keeps the form above
+(w_n is exp(-sum_{j<n} x_j) times a factor of x_n alone): the replay, which stops at the same sample,
+back-propagates the same ``<dL, w_i g_i> - rho x_i``.
+
 The distortion loss of Mip-NeRF 360 on a chain (samples at path positions s_i, scene units, with
 interval lengths delta_i),
 
@@ -370,7 +377,9 @@ def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, 
             raw = record.read(k, evaluate) if record is not None and not primal else None
             sig, terms, lookups = _sample(plan, data, p, rays.d, evaluate, raw)
             x = {c: sig[c] * delta for c in plan.chains}
-            w = {c: quadrature.weight(depth[c], x[c]) for c in plan.chains}
+            after = {c: depth[c] + dr.detach(x[c]) for c in plan.chains}
+            last = ~_transparent(after, plan.stop)  # the ray stops after this sample: it takes what is left
+            w = {c: quadrature.weight_to_stop(depth[c], x[c], last) for c in plan.chains}
             if primal:
                 carry = _accumulate(plan, carry, terms, w, t, evaluate, fg_chains, s, delta)
                 if record is not None:
@@ -380,9 +389,8 @@ def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, 
             else:
                 scale = None if not plan.near_grad else near_scale(t, plan.near_grad)
                 carry = _backpropagate(plan, carry, terms, w, x, t, grads, active, s, delta, acc, scale)
-        depth = {c: depth[c] + dr.detach(x[c]) for c in plan.chains}
         i, k = i + 1, k + dr.select(evaluate, 1, 0)
-        return i, k, b, active & path.more(i, k, b) & _transparent(depth, plan.stop), depth, carry
+        return i, k, b, active & path.more(i, k, b) & ~last, after, carry
 
     state = (mi.UInt32(0), mi.UInt32(0), path.start(), mi.Bool(active) & rays.hit, depth, carry)
     *_, carry = dr.while_loop(state, lambda i, k, b, a, *_: a, body,
