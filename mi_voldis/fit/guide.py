@@ -73,8 +73,7 @@ def colour_prior(inputs, state, fill, dilation=0.01, ring=0.03, nearer=0.9, dept
     # inpainter (a callable, say a learned model) is called one view at a time, as it may not be thread-safe.
     workers = 1 if callable(fill) else min(len(holes), os.cpu_count() or 1) or 1
     with ThreadPoolExecutor(workers) as pool:
-        painted = pool.map(lambda k: paint(np.clip(ds.images[train[k]], 0, 1), holes[k]), list(holes))
-        for k, image in zip(list(holes), painted):
+        for k, image in zip(holes, pool.map(lambda k: paint(np.clip(ds.images[train[k]], 0, 1), holes[k]), holes)):
             images[k] = image
     inpainted = dataclasses.replace(ds, images=images, cameras=[ds.cameras[v] for v in train], masks=region,
                                     split=np.array(["train"] * len(train)), masked=None, effects=None,

@@ -17,6 +17,8 @@ from common import fitted_run  # noqa: E402  (2026-12-04d's: the run and its hel
 from mi_voldis.metrics import psnr
 from mi_voldis.render.views import render_camera
 
+if os.path.exists(sys.argv[3]):  # a picture this script did not make is not overwritten
+    sys.exit(f"error: {sys.argv[3]}: exists; choose a new file name")
 run, ds, tests, res, rest = fitted_run(sys.argv[1:2])
 view = tests[int(sys.argv[2])]
 for stop in [float(s) for s in sys.argv[4].split(",")]:
