@@ -100,6 +100,31 @@ def test_rays_stop_where_transmittance_falls_below_stop_transmittance(stop):
     assert np.all(np.abs(alpha + np.expm1(-2 * sigma)) <= stop)
 
 
+def test_a_stop_for_a_block_renders_as_an_integrator_built_with_it_and_is_given_back_after():
+    """``stopped_at`` (the fit's PSNR log at the fitted scene's stop): the same colours, alphas and samples
+    as an integrator made with that stop, bit for bit; the integrator's own stop before and after."""
+    box = constant_field(10.0, COLOR, UNIT_BOX)
+    own, other = (integrator(box, EMPTY, samples=256, stop_transmittance=s) for s in (1e-4, 0.3))
+    o, d, u = axis_rays(16)
+
+    def run(integ):
+        out = render_rays(integ, o, d, u, layers=("full",))
+        return [np.array(x) for x in out["full"][:2]] + [np.array(out["evaluated"])]
+    before = run(own)
+    with own.stopped_at(0.3) as stopped:
+        inside = run(stopped)
+    after = run(own)
+    for a, b in zip(inside, run(other)):
+        np.testing.assert_array_equal(a, b)
+    assert inside[2].max() < before[2].min()  # fewer samples: the stop did change
+    for a, b in zip(after, before):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(ValueError, match="stop_transmittance must be in \\(0, 1\\)"):
+        with own.stopped_at(0.0):
+            pass
+    assert own.stop_transmittance == 1e-4
+
+
 @pytest.mark.parametrize("value", [0.0, 1.0, -1e-3, 2.0])
 def test_stop_transmittance_outside_0_1_is_refused(value):
     with pytest.raises(Exception, match="stop_transmittance must be in \\(0, 1\\)"):

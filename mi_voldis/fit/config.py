@@ -74,14 +74,14 @@ class FitConfig(Settings):
     # before sh_color was RGB; backgrounds before fringe_contrast kept the dark fringe; scenes before
     # scene_occupancy_voxels / scene_stop_transmittance / scene_strides were written with fitting's cells,
     # stop and steps; fits before strides marched every occupied cell at the fit's step; default plans before
-    # sample_ns did not count their last stage
+    # sample_ns did not count their last stage; fits before average_window kept the last iterate
     ADDED = {"sh_color": "rgb", "host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4,
              "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
              "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0, "fringe_contrast": 0.0,
              "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4, "scene_strides": False,
-             "strides": "none", "sample_ns": None, "float_ns": 0.0}
+             "strides": "none", "sample_ns": None, "float_ns": 0.0, "average_window": 0.0}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -189,6 +189,10 @@ class FitConfig(Settings):
                                          "the carving at each stage's start has removed the bricks that the lower "
                                          "rates kept floaters from forming in)")
     lr_final_ratio: float = setting(0.1, "learning rates decay exponentially to this fraction", above=0, high=1)
+    average_window: float = setting(0.125, "the full phase's fields are the exponential moving average of the last "
+                                           "stage's iterates over a window of this fraction of its steps (the noise "
+                                           "of the last steps' random rays averaged out: mi_voldis.optim.average); "
+                                           "0: the last iterate", low=0, high=1)
     adam_beta1: float = setting(0.9, "Adam's first-moment decay", low=0, high=0.999999)
     adam_beta2: float = setting(0.99, "Adam's second-moment decay", low=0, high=0.999999)
     lr_warmup: int = setting(50, "steps of linear learning-rate ramp after every (re)start of Adam", low=0)

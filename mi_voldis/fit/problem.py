@@ -11,6 +11,7 @@ from ..data.scene_box import rig_extent
 from ..device import from_numpy
 from ..field.state import MEAN_CHANNELS, neighbour_vertices
 from ..losses import background_loss, depth_smoothness_loss, distortion_loss, full_loss
+from ..optim.average import moving_average, stride, window_decay
 from ..optim.parameters import PackedParameters
 from ..raybank import tile_pairs
 from ..regularizers import add_tv_gradient, sparsity_gradient, tv_gradient
@@ -50,16 +51,17 @@ class FieldFit:
     resolution schedule and start empty-space skipping; ``view_rates``: the learning rates per brick by
     the training views that observe it (``lr_views``, :mod:`mi_voldis.fit.observed`);
     ``view_dependence_late``: view-dependent colour fitted from ``sh_view_from`` of the planned steps on
-    (:meth:`view_onset`)."""
+    (:meth:`view_onset`); ``average``: the fields' iterates averaged over the last stage (:meth:`average`)."""
 
     def __init__(self, inputs, state, roles, layers, bank, pool=None, hull=None, phase=0, schedule=True, adam=None,
                  rates=None, tv=None, fit_exposure=False, prior=None, density_hull=None, view_rates=False,
-                 view_dependence_late=False):
+                 view_dependence_late=False, average=False):
         self.inputs, self.state, self.roles, self.layers, self.bank = inputs, state, roles, layers, bank
         self.pool, self.hull, self.phase, self.schedule = pool, hull, phase, schedule
         self.density_hull = density_hull
         self.view_rates = view_rates and inputs.cfg.lr_views > 0
         self.view_dependence_late = view_dependence_late
+        self.averaged = average and inputs.cfg.average_window > 0
         # near-camera gradient scaling, r in world units (mi_voldis.render.march), in the full field's fit:
         # the background refit steps the object's region, away from the cameras, where it would only reweigh
         # the colour prior's views
@@ -82,6 +84,8 @@ class FieldFit:
         or with ``resume`` the one this phase built last (a phase resumed from a checkpoint then skips
         exactly what it skipped before the checkpoint)."""
         self.integrator = fit_integrator(self.inputs, self.state)
+        if not resume:  # the lattice or the colour's channels may have changed: an average starts afresh
+            self.state.averages = {}
         self.params = PackedParameters({r: self.integrator.fields[r] for r in self.roles})
         cameras = [self.inputs.ds.cameras[v] for v in self.inputs.ds.train]
         for r in self.roles:
@@ -203,6 +207,32 @@ class FieldFit:
         # the state holds the values Adam just made, not the ones before them: a stale copy of every field
         # would stay alive until the next occupancy update (a grid's worth of memory at the step's peak)
         self.sync_states()
+        if self.averaged:
+            self.average(step)
+
+    def average(self, step):
+        """From the planned last stage's first step on, ``state.averages`` follows the fields' moving average
+        (:mod:`mi_voldis.optim.average`) over a window of ``average_window`` of that stage's steps, every
+        :func:`~mi_voldis.optim.average.stride` steps; the full phase's fields are that average at its end
+        (:meth:`take_averages`)."""
+        state = self.state
+        if state.steps_full is None or step < state.schedule[-1][0]:
+            return
+        start = state.schedule[-1][0]
+        window = self.inputs.cfg.average_window * (state.steps_full - start)
+        every = stride(window)
+        if (step - start) % every:
+            return
+        beta = window_decay(window, every)
+        for r in self.roles:
+            state.averages[r] = moving_average(None if step == start else state.averages.get(r),
+                                               self.integrator.fields[r].packed, beta)
+
+    def take_averages(self):
+        """The fields become their averages (where :meth:`average` made some), which are then dropped."""
+        for r, a in self.state.averages.items():
+            self.state.fields[r].data = a
+        self.state.averages = {}
 
     # -- loss
     def loss(self, step):

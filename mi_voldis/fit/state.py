@@ -45,6 +45,8 @@ class FitState:
     strides: tuple = ()  # ((Occupancy, step), ...): the integrator's stride levels built with it (strides)
     prior: dict | None = None  # what the lifted background prior did (mi_voldis.fit.lift.lift_prior)
     prior_keys: np.ndarray | None = None  # lattice keys of the background vertices it changed
+    averages: dict = field(default_factory=dict)  # role -> the moving average of its packed values over the
+    # full phase's last stage (mi_voldis.optim.average), until it replaces the field at the phase's end
 
     META = ("phase", "step", "occupancy_on", "log", "phase_times", "sh_choice", "empty_color_fraction", "schedule",
             "steps_full", "plan", "occupancy_phase", "prior")
@@ -57,7 +59,7 @@ class FitState:
         arrays = {}
         for r, s in self.fields.items():
             arrays[f"{r}/table"] = s.layout.table
-            arrays[f"{r}/data"] = np.array(s.data)
+            arrays[f"{r}/data"] = np.asarray(s.data)  # a view of Dr.Jit's buffer: written, never copied
             arrays[f"{r}/shape"] = np.array(s.shape)
             arrays[f"{r}/brick"] = np.array(s.layout.brick)
             arrays[f"{r}/channels"] = np.array(s.channels)
@@ -66,6 +68,8 @@ class FitState:
             arrays[f"{r}/sh_gate"] = np.array(s.sh_gate)
             if s.view_shape is not None:
                 arrays[f"{r}/view_shape"] = np.array(s.view_shape)
+        for r, a in self.averages.items():
+            arrays[f"{r}/average"] = np.asarray(a)
         adam_arrays, meta["adam_t"] = self.adam.state()
         arrays.update({f"adam/{k}": v for k, v in adam_arrays.items()})
         if self.hull_points is not None:
@@ -88,8 +92,10 @@ class FitState:
         if loaded is None:
             return None
         arrays, meta = loaded
-        fields = {}
+        fields, averages = {}, {}
         for r in ("full", "bg"):
+            if f"{r}/average" in arrays:
+                averages[r] = from_numpy(mi.Float, arrays[f"{r}/average"])
             if f"{r}/table" in arrays:
                 layout = Layout(tuple(int(v) for v in arrays[f"{r}/shape"]), int(arrays[f"{r}/brick"]),
                                 arrays[f"{r}/table"])
@@ -107,7 +113,7 @@ class FitState:
             k += 1
         return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields, hull_points=arrays.get("hull_points"),
                    prior_keys=arrays.get("prior_keys"), exposure=exposure, occupancy=occupancy,
-                   strides=tuple(strides), **{key: meta.get(key) for key in cls.META})
+                   strides=tuple(strides), averages=averages, **{key: meta.get(key) for key in cls.META})
 
 
 def occupancy_arrays(prefix, o, **extra):

@@ -263,7 +263,7 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
     if state.schedule is None:
         state.schedule = [[0, coarse_resolution(cfg)]]  # the coarse stage, until planned
     problem = FieldFit(inputs, state, roles, roles, inputs.bank, fit_exposure=True, view_rates=True,
-                       view_dependence_late=True)
+                       view_dependence_late=True, average=True)
     problem.on_stage = lambda step: replan(state, step)
     eval_fn = held_out_psnr(inputs, problem)
     common = dict(log=state.log, checkpoint=checkpoint(problem), **checkpoints(cfg), eval_fn=eval_fn,
@@ -295,6 +295,7 @@ def fit_full(inputs, state, roles, scratch, checkpoint):
     optimize(problem, state.adam, steps=lambda: state.steps_full, start=start, final_ratio=cfg.lr_final_ratio,
              desc="full" if not scratch else "full + bg", **common)
     problem.sync_states()
+    problem.take_averages()
     state.phase_times["full"] = state.phase_times.get("full", 0.0) + time.perf_counter() - t0
 
 
@@ -490,7 +491,8 @@ def describe_plan(state):
 
 def held_out_psnr(inputs, problem):
     """Held-out PSNR of the full field on a few test views, for the PSNR-vs-time log (None without
-    test views)."""
+    test views), its rays stopped where the fitted scene's are (``scene_stop_transmittance``: what the
+    run will render, in fewer samples than fitting's stop)."""
     views = list(inputs.ds.test[: inputs.cfg.eval_views])
     if not views:
         return None
@@ -499,7 +501,8 @@ def held_out_psnr(inputs, problem):
     def evaluate(step):
         problem.sync_states()
         ds = inputs.ds
-        values = [psnr(ds.as_photographed(render_camera(problem.integrator, bank.cams[k], ("full",))["full"]),
-                       ds.images[v]) for k, v in enumerate(views)]
+        with problem.integrator.stopped_at(inputs.cfg.scene_stop_transmittance) as integrator:
+            values = [psnr(ds.as_photographed(render_camera(integrator, bank.cams[k], ("full",))["full"]),
+                           ds.images[v]) for k, v in enumerate(views)]
         return {"test_psnr": float(np.mean(values))}
     return evaluate

@@ -91,9 +91,10 @@ class Adam:
         return values if subset is None else dr.gather(mi.Float, values, subset)
 
     def state(self):
-        """{'m/key': array, 'v/key': array} and {'key': t} for checkpoints."""
-        arrays = {f"m/{k}": np.array(v) for k, v in self.m.items()}
-        arrays.update({f"v/{k}": np.array(v) for k, v in self.v.items()})
+        """{'m/key': array, 'v/key': array} and {'key': t} for checkpoints: views of the moments' buffers
+        (valid until the next step replaces them), not copies."""
+        arrays = {f"m/{k}": np.asarray(v) for k, v in self.m.items()}
+        arrays.update({f"v/{k}": np.asarray(v) for k, v in self.v.items()})
         return arrays, dict(self.t)
 
     def load(self, arrays, t):

@@ -1,6 +1,8 @@
 """The ``voldis`` integrator plugin: aligned-sample mixing of a full and a background radiance field."""
 from __future__ import annotations
 
+import contextlib
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -267,7 +269,7 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
         distortion loss of the ``distortion`` layers, and with ``near_grad`` > 0 gradients scaled near
         the cameras (:mod:`mi_voldis.render.march`)."""
         layers = tuple(layers or (MODES + (("res",) if "residual" in self.fields else ())))
-        key = (layers, samples or self.samples, tuple(distortion), float(near_grad))
+        key = (layers, samples or self.samples, tuple(distortion), float(near_grad), self.stop_transmittance)
         if key not in self._plans:
             lookups, sources = self._lookups()
             needed = mixing.needed_sources(self.composition, sources, layers)
@@ -279,6 +281,19 @@ class VolDisIntegrator(mi.ad.integrators.common.RBIntegrator):
                                           self.step_size, skip, key[2], self.near, key[3],
                                           quadrature.stop_depth(self.stop_transmittance), self._strides)
         return self._plans[key]
+
+    @contextlib.contextmanager
+    def stopped_at(self, transmittance):
+        """Inside the ``with`` block rays stop at ``transmittance`` instead of ``stop_transmittance``: the
+        render of the same fields and skipping by a scene with that stop (a fit's log scores what its
+        fitted scene will render while its steps keep their own stop)."""
+        if not 0 < transmittance < 1:
+            raise ValueError(f"voldis: stop_transmittance must be in (0, 1), got {transmittance}")
+        own, self.stop_transmittance = self.stop_transmittance, float(transmittance)
+        try:
+            yield self
+        finally:
+            self.stop_transmittance = own
 
     def skip_length(self):
         """Contracted space: the step across an empty occupancy cell. Density reaches at most one voxel
