@@ -9,7 +9,7 @@ weights the iterate j steps back by (1 - beta) beta^j: a window of about tau ste
 averages out (its variance falls by about 1 / (2 tau) for uncorrelated steps), while a drift slower than
 the window is followed, about tau steps behind. Iterates a few steps apart differ by little, so the
 average takes every k-th one, k = :func:`stride` (about ITERATES_PER_WINDOW a window), with beta = 1 - k / tau:
-the same window at 1 / k of the passes over the fields (one pass costs about as much as 8% of a step).
+the same window at 1 / k of the passes over the fields (each pass reads and writes every packed value).
 """
 import math
 
