@@ -116,11 +116,11 @@ class FitConfig(Settings):
     sample_ns: float | str | None = setting("auto", "with minutes 'auto', the nanoseconds a step of the last stage "
                                                      "costs per evaluated training sample, its steps counted from "
                                                      "the 100th on ('auto': the backend's, mi_voldis.fit.schedule."
-                                                     "BACKENDS: 168 on llvm, 1.05 on cuda; null: the stage is not "
+                                                     "BACKENDS: 178.25 on llvm, 1.05 on cuda; null: the stage is not "
                                                      "counted, its steps stay as modelled from the coarse one)",
                                             check=_null_or(_auto_or(False, above=0)))
     float_ns: float | str = setting("auto", "with minutes 'auto', the nanoseconds a step of the last stage costs per "
-                                             "stored float of the fields it steps ('auto': the backend's, 1.86 on "
+                                             "stored float of the fields it steps ('auto': the backend's, 1.973 on "
                                              "llvm, 0 on cuda)", check=_auto_or(False, low=0))
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
     min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
@@ -264,7 +264,9 @@ class FitConfig(Settings):
                                              "across a colour edge of the photo depth may jump", low=0)
 
     # ---- modelling only what the scene needs
-    brick: int = setting(8, "vertices along a brick's edge (sparse storage unit)", choices=(4, 8, 16))
+    brick: int = setting(4, "vertices along a brick's edge (the sparse storage unit: a surface is kept with a "
+                            "brick's margin on either side, so smaller bricks store fewer vertices around it, which "
+                            "buys a finer grid within max_memory_gib and cheaper steps)", choices=(4, 8, 16))
     carve_weight: float = setting(1e-2, "at each resolution step bricks are kept where some training ray gives a "
                                         "sample this much weight (where rays end; grown by a brick)", above=0,
                                   high=1)

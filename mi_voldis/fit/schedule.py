@@ -84,7 +84,9 @@ class Backend:
 # RAM (issue #42's bound). Its last stages: a step's seconds over its samples S and the floats F it steps, fitted
 # to the four captures' default fits (fern, horns, the statue, garden: 0.43-0.96 M samples, 34-54 M floats,
 # 0.155-0.212 s a step with the evaluations and checkpoints) and taken 5% above the fit, so that no capture's
-# step is costed below what it took (reports/notes.md, "The last stage costed from what it counts"). Captures
+# step is costed below what it took (reports/notes.md, "The last stage costed from what it counts"); then 6.1%
+# more for bricks of 4 vertices: at the finer grid their memory buys, a step costs that much more a counted unit
+# than bricks of 8 at theirs (the statue side by side, reports/experiments/2026-12-06d). Captures
 # past 12 M training pixels (garden: 42 M) get more than 10 minutes, as issue #42's time targets do (10
 # minutes for fern, horns and the statue, 3-10 M pixels, 15 for garden). cuda: one H200 (reports/gpu.md): a
 # fit's step took 4.9-5.1 ms plus 1.0-1.1 ms per million samples, fern, the statue and garden alike, from 1 M
@@ -92,7 +94,7 @@ class Backend:
 # not apart from them; 32 GiB of the card's memory (an H100 has 80); its budget's bound not grown (no GPU has
 # run a capture past 12 M pixels under it).
 BACKENDS = {
-    "llvm": Backend(reference_msps=18.0, host_ms=0.0, sample_ns=168.0, float_ns=1.86, minutes_per_mpx=2.5,
+    "llvm": Backend(reference_msps=18.0, host_ms=0.0, sample_ns=178.25, float_ns=1.973, minutes_per_mpx=2.5,
                     minutes=(1.5, 10.0), growth_mpx=12.0, max_minutes=15.0, batch_rays=8192, max_memory_gib=4.0),
     "cuda": Backend(reference_msps=1000.0, host_ms=5.0, sample_ns=1.05, float_ns=0.0, minutes_per_mpx=0.5,
                     minutes=(1.0, 5.0), growth_mpx=None, max_minutes=5.0, batch_rays=32768, max_memory_gib=32.0),
@@ -267,7 +269,8 @@ BASE_BYTES = 400 * 2 ** 20
 BYTES_PER_PIXEL = 30
 BYTES_PER_VERTEX = 272
 # Stored vertices per effective surface cell of the final grid, for the plan: fern 55-66 (416^3-528^3), horns
-# 81-87 (432^3-544^3), the removal family 55-195, the statue 150, garden 286 (reports/notes.md). The plan takes
+# 81-87 (432^3-544^3), the removal family 55-195, the statue 150, garden 286 in bricks of 8; the statue 72 at
+# 552^3 in bricks of 4 (reports/notes.md, reports/experiments/2026-12-06d). The plan takes
 # about the lowest: every stage then counts its own vertices before it allocates them
 # (:func:`mi_voldis.fit.fields.fitting_resolution`) and stops at the finest resolution within the bound, and the
 # steps it then has to spare go to that stage (:func:`rescale_after_cap`), so a guess too low costs neither memory
