@@ -84,9 +84,11 @@ class Backend:
 # RAM (issue #42's bound). Its last stages: a step's seconds over its samples S and the floats F it steps, fitted
 # to the four captures' default fits (fern, horns, the statue, garden: 0.43-0.96 M samples, 34-54 M floats,
 # 0.155-0.212 s a step with the evaluations and checkpoints) and taken 5% above the fit, so that no capture's
-# step is costed below what it took (reports/notes.md, "The last stage costed from what it counts"); then 6.1%
-# more for bricks of 4 vertices: at the finer grid their memory buys, a step costs that much more a counted unit
-# than bricks of 8 at theirs (the statue side by side, reports/experiments/2026-12-06d). Captures
+# step is costed below what it took (reports/notes.md, "The last stage costed from what it counts"); then priced
+# for bricks of 4 vertices at the finer grids their memory buys: a sample costs 1.245 times and a float 0.927 times
+# bricks of 8's at theirs (t = x S + y F solved for the statue, float-heavy, and garden, sample-heavy, timed side
+# by side at both sizes: reports/experiments/2026-12-06d, 2026-12-06e), so a user's bricks of 8 are costed high
+# on all four captures (the statue's step 7%), their plans ending early rather than late. Captures
 # past 12 M training pixels (garden: 42 M) get more than 10 minutes, as issue #42's time targets do (10
 # minutes for fern, horns and the statue, 3-10 M pixels, 15 for garden). cuda: one H200 (reports/gpu.md): a
 # fit's step took 4.9-5.1 ms plus 1.0-1.1 ms per million samples, fern, the statue and garden alike, from 1 M
@@ -94,7 +96,7 @@ class Backend:
 # not apart from them; 32 GiB of the card's memory (an H100 has 80); its budget's bound not grown (no GPU has
 # run a capture past 12 M pixels under it).
 BACKENDS = {
-    "llvm": Backend(reference_msps=18.0, host_ms=0.0, sample_ns=178.25, float_ns=1.973, minutes_per_mpx=2.5,
+    "llvm": Backend(reference_msps=18.0, host_ms=0.0, sample_ns=209.1, float_ns=1.724, minutes_per_mpx=2.5,
                     minutes=(1.5, 10.0), growth_mpx=12.0, max_minutes=15.0, batch_rays=8192, max_memory_gib=4.0),
     "cuda": Backend(reference_msps=1000.0, host_ms=5.0, sample_ns=1.05, float_ns=0.0, minutes_per_mpx=0.5,
                     minutes=(1.0, 5.0), growth_mpx=None, max_minutes=5.0, batch_rays=32768, max_memory_gib=32.0),
