@@ -13,5 +13,11 @@ sys.path.insert(0, os.getcwd())
 from mi_voldis.render import quadrature  # noqa: E402
 from voldis_cli.train import entry  # noqa: E402
 
-quadrature.STOP_TRANSMITTANCE = float(sys.argv.pop(1))
+try:
+    stop = float(sys.argv.pop(1))
+except (IndexError, ValueError):
+    stop = None
+if stop is None or not 0 < stop < 1:
+    sys.exit("stop_trial.py: the first argument must be a transmittance in (0, 1)")
+quadrature.STOP_TRANSMITTANCE = stop
 entry()
