@@ -1492,3 +1492,38 @@ def test_the_hull_and_visibility_kernels_answer_as_numpy_does_view_by_view():
     np.testing.assert_allclose(colour[seen], total[seen] / count[seen, None], rtol=1e-12)
     assert len(visual_hull(points[:0], cams, masks, 0, 0.9)) == 0 == len(in_view(points[:0], cams, depths, masks))
     assert [a.shape for a in seen_elsewhere(points[:0], cams, depths, masks, images)] == [(0,), (0, 3)]
+
+
+def test_fitting_keeps_the_bricks_where_training_rays_end():
+    """The carve's evidence (:func:`~mi_voldis.fit.fields.ray_weights`) and rule, on the sphere on the
+    floor: the bricks under the floor (behind its three vertices of raw 4, 98% opaque a voxel) and the
+    empty space above the sphere get no weight from any training ray (every ray ends on the floor or the
+    sphere); bricks of the floor the views see get a sample of most of a ray's light; and
+    :func:`~mi_voldis.fit.fields.refine` keeps exactly the bricks above ``carve_weight``, grown by one, for
+    two thresholds."""
+    from mi_voldis.field.state import carve, shape_for
+    from mi_voldis.fit.fields import fit_integrator, ray_weights, refine
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
+    lo, hi = np.array([-1.0] * 3), np.array([1.0] * 3)
+    kept = {}
+    for threshold in (1e-2, 0.3):
+        cfg = cfg.replace(carve_weight=threshold)
+        inputs = FitInputs.of(ds, cfg, "", progress=False)
+        state = FitState(lo, hi, Adam({}, cfg.adam_beta1, cfg.adam_beta2), fields={"full": full})
+        state.schedule, state.steps_full = [[0, 40]], 1
+        integrator = fit_integrator(inputs, state)
+        weights, evaluated = ray_weights(inputs, integrator, "full")
+        assert weights.shape == full.layout.table.shape and len(evaluated) > 0
+        b = full.layout.brick  # brick k holds the vertices k b .. k b + b - 1, a sample its nearest vertex's
+        floor = int(np.floor((FLOOR_Y - lo[1]) / (2.0 / 39) + 0.5)) // b
+        assert weights[:, :floor, :].max() < 1e-6  # under the floor
+        top = int(np.floor((0.6 - lo[1]) / (2.0 / 39) + 0.5)) // b + 1  # bricks above y = 0.6: the sphere's
+        assert weights[:, top:, :].max() < 1e-6  # top is at y = 0.1, its haze within 0.15 of it
+        assert np.sort(weights[:, floor, :].ravel())[-20:].min() > 0.5
+        refined = FitState(lo, hi, state.adam, fields={"full": full})
+        used, _ = refine(inputs, refined, integrator, ("full",), 40)
+        assert used == 40 and refined.fields["full"].layout.shape == shape_for(lo, hi, 40)
+        expected = carve(full, weights > threshold)
+        np.testing.assert_array_equal(refined.fields["full"].layout.table > 0, expected)
+        kept[threshold] = expected.sum()
+    assert kept[0.3] < kept[1e-2]
