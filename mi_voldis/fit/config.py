@@ -267,7 +267,7 @@ class FitConfig(Settings):
     brick: int = setting(4, "vertices along a brick's edge (the sparse storage unit: a surface is kept with a "
                             "brick's margin on either side, so smaller bricks store fewer vertices around it, which "
                             "buys a finer grid within max_memory_gib and cheaper steps)", choices=(4, 8, 16))
-    carve_weight: float = setting(3e-2, "at each resolution step bricks are kept where some training ray gives a "
+    carve_weight: float = setting(1e-2, "at each resolution step bricks are kept where some training ray gives a "
                                         "sample this much weight (where rays end; grown by a brick): higher keeps "
                                         "fewer bricks, so a finer grid fits in max_memory_gib, until surfaces whose "
                                         "weight spreads over many samples (foliage, grass) lose bricks and show "
