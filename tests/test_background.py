@@ -1521,9 +1521,63 @@ def test_fitting_keeps_the_bricks_where_training_rays_end():
         assert weights[:, top:, :].max() < 1e-6  # top is at y = 0.1, its haze within 0.15 of it
         assert np.sort(weights[:, floor, :].ravel())[-20:].min() > 0.5
         refined = FitState(lo, hi, state.adam, fields={"full": full})
-        used, _ = refine(inputs, refined, integrator, ("full",), 40)
+        used, _, weight = refine(inputs, refined, integrator, ("full",), 40)
+        assert weight == threshold
         assert used == 40 and refined.fields["full"].layout.shape == shape_for(lo, hi, 40)
         expected = carve(full, weights > threshold)
         np.testing.assert_array_equal(refined.fields["full"].layout.table > 0, expected)
         kept[threshold] = expected.sum()
     assert kept[0.3] < kept[1e-2]
+
+
+def test_a_stage_that_memory_binds_tightens_its_carve_only_as_far_as_it_must():
+    """:func:`~mi_voldis.fit.fields.refine` under a vertex bound, on the sphere on the floor refined from
+    40 to 72: without a bound, or where ``carve_weight``'s carve fits, it carves at ``carve_weight``;
+    where that carve would hold the lattice below 72, it takes the loosest weight of
+    :func:`~mi_voldis.fit.fields.carve_ladder` whose carve reaches 72 (exactly that carve's vertices);
+    where none does, the loosest of those that reach the finest lattice any reaches, as a memory cap;
+    with ``carve_weight_memory`` at ``carve_weight`` it never tightens."""
+    from mi_voldis.field.state import carve, resampled_vertices, shape_for
+    from mi_voldis.fit.fields import FitInputs, carve_ladder, fit_integrator, ray_weights, refine
+    ds, cfg, full, _, FitState, Adam = synthetic_object_scene()
+    lo, hi = np.array([-1.0] * 3), np.array([1.0] * 3)
+    cfg = cfg.replace(carve_weight=1e-2, carve_weight_memory=0.3)
+    ladder = carve_ladder(cfg)
+    np.testing.assert_allclose(ladder, [1e-2, 1e-2 * 30 ** (1 / 3), 1e-2 * 30 ** (2 / 3), 0.3])
+    assert carve_ladder(cfg.replace(carve_weight_memory=1e-2)) == [1e-2] == \
+        carve_ladder(cfg.replace(carve_weight_memory=1e-3))
+    inputs = FitInputs.of(ds, cfg, "", progress=False)
+
+    def fresh():
+        state = FitState(lo, hi, Adam({}, cfg.adam_beta1, cfg.adam_beta2), fields={"full": full})
+        state.schedule, state.steps_full = [[0, 40]], 1
+        return state
+
+    integrator = fit_integrator(inputs, fresh())
+    weights, _ = ray_weights(inputs, integrator, "full")
+    keeps = [carve(full, weights > w) for w in ladder]
+
+    def vertices(res):
+        return [resampled_vertices(full, shape_for(lo, hi, res), keep) for keep in keeps]
+
+    counts = vertices(72)
+    assert all(a >= b for a, b in zip(counts, counts[1:]))
+    k = next(i for i in range(1, len(ladder)) if counts[i] < counts[0])  # the first rung that keeps fewer
+
+    def refined(bound, settings=inputs):
+        state = fresh()
+        got = refine(settings, state, integrator, ("full",), 72, bound)
+        return got, state.fields["full"]
+
+    assert refined(None)[0] == (72, None, 1e-2) == refined(counts[0])[0]  # no bound, or 1e-2's carve fits
+    (used, why, weight), field = refined(counts[k])  # only rung k's carve (or a tighter one's) fits
+    assert (used, why, weight) == (72, None, ladder[k]) and field.layout.shape == shape_for(lo, hi, 72)
+    assert field.vertices == counts[k]
+    at_56 = vertices(56)
+    assert counts[-1] > at_56[-1] and at_56[0] > at_56[-1]
+    j = next(i for i in range(len(ladder)) if at_56[i] <= at_56[-1])  # the loosest carve that reaches 56
+    (used, why, weight), field = refined(at_56[-1])  # no carve reaches 72: 56, at rung j
+    assert (used, why, weight) == (56, "memory", ladder[j]) and field.vertices == at_56[j]
+    never = FitInputs.of(ds, cfg.replace(carve_weight_memory=1e-2), "", progress=False)
+    (used, why, weight), _ = refined(counts[k], never)  # never tightens: held below 72
+    assert used < 72 and (why, weight) == ("memory", 1e-2)

@@ -272,6 +272,12 @@ class FitConfig(Settings):
                                         "fewer bricks, so a finer grid fits in max_memory_gib, until surfaces whose "
                                         "weight spreads over many samples (foliage, grass) lose bricks and show "
                                         "holes", above=0, high=1)
+    carve_weight_memory: float = setting(3e-2, "a stage whose carved grid would pass max_memory_gib tightens "
+                                               "carve_weight, in steps up to this weight, to the loosest one that "
+                                               "lets it reach its planned grid (or else the finest grid it can): "
+                                               "only captures that memory binds (large unbounded scenes) lose "
+                                               "their faintest bricks (at or below "
+                                               "carve_weight: never tighten; reports/notes.md)", above=0, high=1)
     carve: bool = setting(True, "carve bricks where no training ray ends (false: keep every brick, i.e. a dense "
                                 "grid, for comparison)")
     carve_rays: int = setting(1 << 20, "training rays traced to find where rays end (all pixels when fewer)", low=1)

@@ -21,6 +21,8 @@ from .schedule import HALF_VOXEL, affordable_vertices, coarse_resolution, finest
 
 # the share of traced rays cut short by the march's sample cap at which a fit refines no further (sample_bound)
 SAMPLE_CUT_SHARE = 0.01
+# steps from carve_weight to carve_weight_memory a stage that memory binds may tighten its carve in
+CARVE_RUNGS = 3
 
 
 @dataclass(frozen=True)
@@ -71,19 +73,33 @@ def refine(inputs, state, integrator, roles, resolution, max_vertices=None, max_
     below the current lattice) whose carved fields hold no more stored vertices together
     (:func:`fitting_resolution`), and with ``max_samples`` in curved (contracted) space no finer than
     :func:`sample_bound` allows.
-    Returns the resolution used and the bound that chose it where one did ('memory', 'samples', None)."""
-    keeps, evaluated = {}, []
+    Where ``max_vertices`` would hold the lattice below ``resolution``, the carve tightens along
+    :func:`carve_ladder` (up to ``carve_weight_memory``) to the loosest weight that lets it reach
+    ``resolution``, or else to the one that reaches the finest lattice: a stage that memory binds trades
+    the faintest bricks for resolution, one that it does not keeps them all.
+    Returns the resolution used, the bound that chose it where one did ('memory', 'samples', None), and the
+    carve weight used (None without carving)."""
+    cfg = inputs.cfg
+    weights, evaluated = {}, []
     for r in roles:
-        f = state.fields[r]
-        if not inputs.cfg.carve:
-            keeps[r] = None
-            continue
-        weights, counts = ray_weights(inputs, integrator, r)
-        evaluated.append(counts)
-        needed = weights > inputs.cfg.carve_weight
-        if not needed.any():  # a field still nearly transparent everywhere: keep its strongest bricks
-            needed = weights >= 0.5 * weights.max() if weights.max() > 0 else np.ones(weights.shape, bool)
-        keeps[r] = carve(f, needed)
+        if cfg.carve:
+            weights[r], counts = ray_weights(inputs, integrator, r)
+            evaluated.append(counts)
+
+    def keeps_at(threshold):
+        if not cfg.carve:
+            return {r: None for r in roles}
+        keeps = {}
+        for r in roles:
+            needed = weights[r] > threshold
+            if not needed.any():  # a field still nearly transparent everywhere: keep its strongest bricks
+                top = weights[r].max()
+                needed = weights[r] >= 0.5 * top if top > 0 else np.ones(weights[r].shape, bool)
+            keeps[r] = carve(state.fields[r], needed)
+        return keeps
+
+    weight = cfg.carve_weight if cfg.carve else None
+    keeps = keeps_at(weight)
     bound = None
     current = max(max(state.fields[r].shape) for r in roles)
     if max_samples is not None and evaluated and inputs.space.is_curved:
@@ -92,11 +108,28 @@ def refine(inputs, state, integrator, roles, resolution, max_vertices=None, max_
             resolution, bound = limit, "samples"
     if max_vertices is not None:
         used = fitting_resolution(state, keeps, resolution, max_vertices)
+        for tighter in (carve_ladder(cfg) if cfg.carve else ())[1:]:
+            if used >= resolution:
+                break
+            tight = keeps_at(tighter)
+            reached = fitting_resolution(state, tight, resolution, max_vertices)
+            if reached > used:
+                used, keeps, weight = reached, tight, tighter
         resolution, bound = (used, "memory") if used < resolution else (resolution, bound)
     for r in roles:
         state.fields[r] = resample(state.fields[r], shape_for(state.lo, state.hi, resolution), keeps[r])
     dr.flush_malloc_cache()  # the coarser lattice's arrays, cached by Dr.Jit's allocator, are of no use now
-    return resolution, bound
+    return resolution, bound, weight
+
+
+def carve_ladder(cfg):
+    """The carve weights a stage that memory binds may try, loosest first: ``carve_weight`` and then
+    CARVE_RUNGS geometric steps up to ``carve_weight_memory`` (just ``carve_weight`` where that is not
+    above it)."""
+    lo, hi = cfg.carve_weight, cfg.carve_weight_memory
+    if hi <= lo:
+        return [lo]
+    return [float(lo * (hi / lo) ** (k / CARVE_RUNGS)) for k in range(CARVE_RUNGS + 1)]
 
 
 def sample_bound(current, evaluated, max_samples):

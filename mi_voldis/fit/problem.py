@@ -174,8 +174,10 @@ class FieldFit:
             self.sync_states()
             planned = resolution_at(state.schedule, step)
             bound = memory_bound(self.inputs, state)  # None where the user set the grid: then no bound applies
-            used, reason = refine(self.inputs, state, self.integrator, self.roles, planned, bound,
-                                  None if bound is None else cfg.max_samples)
+            used, reason, weight = refine(self.inputs, state, self.integrator, self.roles, planned, bound,
+                                          None if bound is None else cfg.max_samples)
+            if weight is not None and weight != cfg.carve_weight:  # memory bound this stage: a tighter carve
+                state.plan.setdefault("carve_tightened", []).append([step, weight])
             if used < planned:  # the carved lattice would outgrow max_memory_gib, or its rays max_samples: this
                 # stage and later ones stop at it
                 if "reference_msps" in state.plan:  # the default plan: the seconds saved buy steps at the cap
