@@ -75,7 +75,7 @@ def refine(inputs, state, integrator, roles, resolution, max_vertices=None, max_
     :func:`sample_bound` allows.
     Where ``max_vertices`` would hold the lattice below ``resolution``, the carve tightens along
     :func:`carve_ladder` (up to ``carve_weight_memory``) to the loosest weight that lets it reach
-    ``resolution``, or else to the one that reaches the finest lattice: a stage that memory binds trades
+    ``resolution``, or else the loosest that reaches the finest lattice any does: a stage that memory binds trades
     the faintest bricks for resolution, one that it does not keeps them all.
     Returns the resolution used, the bound that chose it where one did ('memory', 'samples', None), and the
     carve weight used (None without carving)."""
