@@ -3,10 +3,16 @@
 Colours, masks and camera parameters live on the device; a batch is a set of pixel indices, turned
 into world rays there (a random position inside each pixel, as a box-filtered film integrates).
 
-Photographs stored at 8 bits (every value one of k / 255) are kept as one UInt32 a pixel, the three
-codes and the mask bit (4 bytes where float colours and mask take 16: half a GiB on a 185-view capture at
-512^2), decoded through a table of the very floats the dataset holds, so a batch's colours are the dataset's
-bit for bit; other images keep float colours and a float mask (none where the dataset has no masks).
+Colours and the mask bit are kept as one UInt32 a pixel (4 bytes where float colours and mask take 16:
+half a GiB on a 185-view capture at 512^2), three codes of ``bits`` bits each and the mask above them,
+decoded through a table of ``2^bits`` levels:
+- photographs stored at 8 bits (every value one of k / 255): their 8-bit codes, decoded through a table of the
+  very floats the dataset holds, so a batch's colours are the dataset's bit for bit;
+- other images in [0, 1] (undistorted or resized photographs, inpainted guides): 10-bit codes k / 1023, off
+  the dataset's values by at most half a 10-bit step (4.9e-4, a quarter of the photograph's own 8-bit step;
+  the rounding's noise alone would be 71 dB PSNR);
+- images with values outside [0, 1] or NaN (images a caller made): float colours and a float mask (none where
+  the dataset has no masks).
 
 A batch can come in t x t pixel tiles (each around a random pixel of a random view): the rays of a
 tile march side by side through the same cells, so the grid lookups of one SIMD packet share cache
@@ -28,13 +34,14 @@ class RayBank:
         masks = dataset.masks[self.views] if dataset.masks is not None else np.zeros((n, h, w), bool)
         self.masks_np = masks
         packed = packed_pixels(dataset.images, self.views, masks)
-        self.codes = None if packed is None else mi.UInt32(packed.reshape(-1))
+        self.codes = None if packed is None else mi.UInt32(packed[0].reshape(-1))
+        self.bits = None if packed is None else packed[1]
         if packed is None:
             self.colors = mi.Float(dataset.images[self.views].reshape(-1))
             # no masks: no array of zeros (a batch's mask is then a constant)
             self.masks = None if dataset.masks is None else mi.Float(masks.reshape(-1).astype(np.float32))
         else:
-            self.levels = mi.Float(EIGHT_BIT_LEVELS)
+            self.levels = mi.Float(LEVELS[self.bits])
         # nerfstudio's pixels to ignore: batches without a pool of their own draw from the others
         ignore = dataset.ignore[self.views] if dataset.ignore is not None else None
         self.ignore_np = ignore
@@ -74,27 +81,49 @@ class RayBank:
             mask = dr.zeros(mi.Float, dr.width(index)) if self.masks is None else dr.gather(mi.Float, self.masks, index)
         else:
             code = dr.gather(mi.UInt32, self.codes, index)
-            color = mi.Color3f(*(dr.gather(mi.Float, self.levels, (code >> shift) & 255) for shift in (0, 8, 16)))
-            mask = mi.Float(code >> 24)
+            top, bits = (1 << self.bits) - 1, self.bits
+            color = mi.Color3f(*(dr.gather(mi.Float, self.levels, (code >> (k * bits)) & top) for k in range(3)))
+            mask = mi.Float(code >> (3 * bits))
         return o, d, color, mask, view
 
 
-# the floats an 8-bit photograph holds once read (mi_voldis.data.images: code / 255 in float32)
+# the floats an 8-bit photograph holds once read (mi_voldis.data.images: code / 255 in float32), and the
+# levels of the 10-bit codes of other images in [0, 1]
 EIGHT_BIT_LEVELS = np.arange(256, dtype=np.float32) / np.float32(255)
+LEVELS = {8: EIGHT_BIT_LEVELS, 10: np.arange(1024, dtype=np.float32) / np.float32(1023)}
+
+
+def quantized(image, bits):
+    """uint32 codes of the nearest of LEVELS[``bits``] to each value of ``image`` (clipped to [0, 1])."""
+    top = (1 << bits) - 1
+    with np.errstate(invalid="ignore"):  # a NaN casts to some integer: kept in range, code_bits refuses it
+        return np.minimum(np.rint(np.clip(image, 0.0, 1.0) * top).astype(np.uint32), top)
+
+
+def code_bits(images, views):
+    """8 where every value of the ``views`` of ``images`` is one of EIGHT_BIT_LEVELS, else 10 where every
+    value is in [0, 1], else None (a value above 1, below 0 or NaN, which fails both comparisons)."""
+    if all(np.array_equal(EIGHT_BIT_LEVELS[quantized(images[v], 8)], images[v]) for v in views):
+        return 8
+    with np.errstate(invalid="ignore"):
+        if all(((images[v] >= 0.0) & (images[v] <= 1.0)).all() for v in views):
+            return 10
+    return None
 
 
 def packed_pixels(images, views, masks):
-    """(n, H, W) uint32 of the ``views`` of float ``images``: the 8-bit codes of R, G and B in bytes 0-2
-    and the (n, H, W) bool ``masks`` in bit 24; None unless every value is one of EIGHT_BIT_LEVELS. A view
-    at a time: no float copy of the images."""
+    """((n, H, W) uint32, bits) of the ``views`` of float ``images``: the codes of R, G and B
+    (:func:`quantized`), ``bits`` (:func:`code_bits`) each from bit 0, and the (n, H, W) bool ``masks`` in
+    bit 3 ``bits``; None where the images have values outside [0, 1]. A view at a time: no float copy of
+    the images."""
+    bits = code_bits(images, views)
+    if bits is None:
+        return None
     out = np.empty(masks.shape, np.uint32)
     for i, v in enumerate(views):
-        with np.errstate(invalid="ignore"):  # a NaN casts to some integer: kept in range, it fails the comparison
-            codes = np.minimum(np.rint(np.clip(images[v], 0.0, 1.0) * 255).astype(np.uint32), 255)
-        if not np.array_equal(EIGHT_BIT_LEVELS[codes], images[v]):
-            return None
-        out[i] = codes[..., 0] | (codes[..., 1] << 8) | (codes[..., 2] << 16) | (masks[i].astype(np.uint32) << 24)
-    return out
+        c = quantized(images[v], bits)
+        out[i] = c[..., 0] | (c[..., 1] << bits) | (c[..., 2] << 2 * bits) | (masks[i].astype(np.uint32) << 3 * bits)
+    return out, bits
 
 
 def tile_pixels(rng, anchors, tile, height, width):

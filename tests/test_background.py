@@ -1246,15 +1246,21 @@ def test_the_guided_prior_targets_each_views_own_inpainting_inside_its_mask_only
     expected = np.stack([dilate(ds.masks[v], grow) | effects[v] if v != unmasked else np.zeros(ds.size, bool)
                          for v in ds.train])
     np.testing.assert_array_equal(np.sort(pool), np.flatnonzero(expected.reshape(-1)))
-    colours = np.array(bank.colors).reshape(len(ds.train), *ds.size, 3)
+    every, centres = np.arange(bank.pixels, dtype=np.uint32), np.zeros((bank.pixels, 2), np.float32)
+    colours = np.array(bank.rays(every, centres)[2]).T.reshape(len(ds.train), *ds.size, 3)
     for k, v in enumerate(ds.train):
         if v == unmasked:
             continue
         painted = inpainter("telea")(ds.images[v], expected[k])  # no occluder in this scene
-        np.testing.assert_allclose(colours[k][expected[k]], painted[expected[k]], atol=1e-6)
-        np.testing.assert_allclose(colours[k][~expected[k]], ds.images[v][~expected[k]], atol=0.51 / 255)  # 8-bit
+        # the bank keeps 10-bit codes (raybank): within half their step of the painting, and of the photographs
+        # (as the painting rounded them to 8 bits)
+        tenbit = 0.5 / 1023 + 1e-6
+        np.testing.assert_allclose(colours[k][expected[k]], painted[expected[k]], rtol=0, atol=tenbit)
+        outside = ~expected[k]
+        np.testing.assert_allclose(colours[k][outside], ds.images[v][outside], rtol=0, atol=0.51 / 255 + tenbit)
     flat = colour_prior(inputs, state, lambda image, hole: np.where(hole[..., None], 0.25, image))[0]  # any callable
-    np.testing.assert_allclose(np.array(flat.colors).reshape(-1, 3)[pool], 0.25)
+    flat_colours = np.array(flat.rays(every, centres)[2]).T
+    np.testing.assert_allclose(flat_colours[pool], 0.25, rtol=0, atol=0.5 / 1023)
     for v in ds.test:
         out = ~dilate(ds.masks[v], int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size))) + 2)
         assert np.abs(renders["guided"][v][out] - renders["harmonic"][v][out]).max() < 2 / 255

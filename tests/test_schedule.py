@@ -90,7 +90,8 @@ def test_affordable_resolution_keeps_the_estimated_memory_within_max_memory_gib(
     assert memory_at(rd, 64 ** 3) <= cfg.max_memory_gib * 2 ** 30 < memory_at(rd + 16, 64 ** 3)
     assert memory_at(rd, 64 ** 3) == memory_at(rd, 1e9) and rd > 64
     # the photos' share comes first: a capture whose pixels fill the memory gets the coarse grid
-    assert affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, 2 ** 32 // 30) == 64
+    from mi_voldis.fit.schedule import BYTES_PER_PIXEL
+    assert affordable_resolution(cfg, StepCost(1e-6, 64), 1e6, SURVEY, 2 ** 32 // BYTES_PER_PIXEL) == 64
 
 
 def test_a_stage_stops_short_of_the_memory_bound_on_its_counted_vertices():

@@ -193,11 +193,11 @@ def test_packed_regularisers_match_the_tensor_formulas():
     assert not packed[:, 13:].any() and not packed[:b3].any()
 
 
-@pytest.mark.parametrize("kind", ["8-bit", "float", "float, no masks"])
-def test_a_batch_holds_the_datasets_pixels_bit_for_bit_packed_or_not(tiny_dataset, kind):
-    """8-bit photographs are kept as one UInt32 a pixel (codes and mask bit), others as floats (and no mask
-    array where the dataset has no masks): either way a batch's colours and masks are the dataset's own
-    values at its pixels."""
+@pytest.mark.parametrize("kind", ["8-bit", "10-bit", "10-bit, no masks", "float", "float, no masks"])
+def test_a_batch_holds_the_datasets_pixels_packed_or_not(tiny_dataset, kind):
+    """8-bit photographs are kept as one UInt32 a pixel (codes and mask bit) and a batch gives their values
+    bit for bit; other images in [0, 1] as 10-bit codes, within half a 10-bit step; images with a value
+    outside [0, 1] as floats (and no mask array where the dataset has no masks), bit for bit. Masks exact."""
     from mi_voldis.data import load_dataset
     from mi_voldis.raybank import RayBank
     ds = load_dataset(tiny_dataset)
@@ -205,35 +205,50 @@ def test_a_batch_holds_the_datasets_pixels_bit_for_bit_packed_or_not(tiny_datase
     assert masks.any()
     if kind != "8-bit":
         ds.images = ds.images.copy()
-        ds.images[ds.train[-1], 3, 5, 1] += 1e-3  # one value off the 8-bit levels: floats for the whole bank
-    if kind == "float, no masks":
+        # one value off the 8-bit levels (10 bits for the whole bank), or above 1 (floats for it)
+        ds.images[ds.train[-1], 3, 5, 1] = 0.3 if kind.startswith("10-bit") else 1.25
+        ds.images[ds.train[0], 2, 2] = [0.5, 0.0, 1.0]  # 1023 / 2 rounds half to even, and both ends
+    if kind.endswith("no masks"):
         ds.masks, masks = None, np.zeros_like(masks)
     bank = RayBank(ds, ds.train)
-    assert (bank.codes is not None) == (kind == "8-bit")
+    assert bank.bits == {"8-bit": 8, "10-bit": 10, "10-bit, no masks": 10}.get(kind)
     assert (kind == "float, no masks") == (bank.codes is None and bank.masks is None)
     index = np.random.default_rng(0).integers(0, bank.pixels, 500).astype(np.uint32)
-    index[0] = (len(ds.train) - 1) * bank.height * bank.width + 3 * bank.width + 5  # the changed pixel
+    index[0] = (len(ds.train) - 1) * bank.height * bank.width + 3 * bank.width + 5  # the changed pixels
+    index[1] = 2 * bank.width + 2
     _, _, color, mask, _ = bank.rays(index, np.full((500, 2), 0.5, np.float32))
     view, pixel = np.divmod(index, bank.height * bank.width)
     photos = ds.images[ds.train].reshape(len(ds.train), -1, 3)
-    np.testing.assert_array_equal(np.array(color).T, photos[view, pixel])
+    if kind.startswith("10-bit"):
+        got = np.array(color).T
+        np.testing.assert_allclose(got, photos[view, pixel], rtol=0, atol=0.5 / 1023 + 1e-7)
+        np.testing.assert_array_equal(got * 1023, np.rint(got * 1023))  # on the 10-bit levels
+        np.testing.assert_array_equal(got[1], [np.float32(512) / np.float32(1023), 0.0, 1.0])  # 511.5 -> 512
+    else:
+        np.testing.assert_array_equal(np.array(color).T, photos[view, pixel])
     np.testing.assert_array_equal(np.array(mask), masks[ds.train].reshape(len(ds.train), -1)[view, pixel])
 
 
-def test_images_off_the_8_bit_levels_are_not_packed_and_raise_no_warning():
-    """Values above 1, between two levels or NaN (images a caller made, not read from files): floats."""
+def test_images_are_packed_at_8_bits_on_its_levels_else_10_within_0_1_else_not_and_raise_no_warning():
+    """Values between two 8-bit levels: 10 bits; above 1, below 0 or NaN (images a caller made, not read
+    from files): floats."""
     import warnings
 
     from mi_voldis.raybank import EIGHT_BIT_LEVELS, packed_pixels
     masks = np.zeros((1, 2, 2), bool)
+    masks[0, 1, 1] = True
     base = np.broadcast_to(EIGHT_BIT_LEVELS[[0, 7, 200, 255]].reshape(1, 2, 2, 1), (1, 2, 2, 3)).copy()
-    assert packed_pixels(base, [0], masks) is not None
-    for bad in (1.5, 0.5, np.nan):
+    codes, bits = packed_pixels(base, [0], masks)
+    assert bits == 8 and codes[0, 1, 1] == 255 * 0x010101 + (1 << 24) and codes[0, 0, 1] == 7 * 0x010101
+    for bad, want in ((0.5, 10), (1.5, None), (-0.25, None), (np.nan, None)):
         images = base.copy()
         images[0, 1, 0, 2] = bad
         with warnings.catch_warnings():
             warnings.simplefilter("error")
-            assert packed_pixels(images, [0], masks) is None
+            packed = packed_pixels(images, [0], masks)
+        assert (None if packed is None else packed[1]) == want
+    codes, bits = packed_pixels(np.full((1, 2, 2, 3), 0.5, np.float32), [0], masks)
+    assert bits == 10 and codes[0, 1, 1] == 512 | (512 << 10) | (512 << 20) | (1 << 30)
 
 
 def test_tiles_cover_their_anchor_inside_the_image():

@@ -257,8 +257,9 @@ def stages(cfg, coarse, final):
     return list(zip(starts, levels))
 
 
-# A fit's peak memory (measured in reports/notes.md): a base that grows with the training pixels (the photos,
-# the ray bank: about 400 MiB and 30 bytes a pixel, fern 0.3 and garden 1.5 GiB before any grid) and a share per
+# A fit's peak memory (measured in reports/notes.md): a base that grows with the training pixels (the photos as
+# float32 and the ray bank's codes, 4 bytes a pixel (mi_voldis.raybank): about 400 MiB and 22 bytes a pixel, garden
+# 1.2 GiB before any grid; 30 while the bank kept garden's undistorted photos as floats) and a share per
 # stored vertex of the fitted fields at colour degree 0: the values, their Adam moments and gradient and the three
 # arrays Adam's kernel writes beside them, the TV's neighbour table (24 bytes), and what Dr.Jit's allocator keeps
 # of the step's temporaries: 227-231 bytes measured on fern, horns and the statue (464^3 to 528^3, 12-13 M
@@ -268,7 +269,7 @@ def stages(cfg, coarse, final):
 # (Adam's ``subsets``), and each phase starts with Dr.Jit's allocation cache released. A few percent above the
 # worst:
 BASE_BYTES = 400 * 2 ** 20
-BYTES_PER_PIXEL = 30
+BYTES_PER_PIXEL = 22
 BYTES_PER_VERTEX = 272
 # Stored vertices per effective surface cell of the final grid, for the plan: fern 55-66 (416^3-528^3), horns
 # 81-87 (432^3-544^3), the removal family 55-195, the statue 150, garden 286 in bricks of 8; the statue 72 at
