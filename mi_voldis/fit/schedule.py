@@ -258,12 +258,13 @@ def stages(cfg, coarse, final):
 
 
 # A fit's peak memory (measured in reports/notes.md): a base that grows with the training pixels (the photos as
-# float32 and the ray bank's codes, 4 bytes a pixel (mi_voldis.raybank): about 400 MiB and 22 bytes a pixel, garden
-# 1.2 GiB before any grid; 30 while the bank kept garden's undistorted photos as floats) and a share per
+# float32 and the ray bank's codes, 4 bytes a pixel (mi_voldis.raybank): about 400 MiB and 22 bytes a pixel; 30
+# while the bank kept garden's undistorted photos as floats) and a share per
 # stored vertex of the fitted fields at colour degree 0: the values, their Adam moments and gradient and the three
 # arrays Adam's kernel writes beside them, the TV's neighbour table (24 bytes), and what Dr.Jit's allocator keeps
 # of the step's temporaries: 227-231 bytes measured on fern, horns and the statue (464^3 to 528^3, 12-13 M
-# vertices), 266 on garden (320^3, 9.8 M vertices, whose rays take the most samples). The state holds the values
+# vertices), 266 on garden (320^3, 9.8 M vertices, whose rays take the most samples); in bricks of 4, garden 228
+# (416^3, 10.2 M) and the statue 265 (592^3, 13.0 M, its carve tightened). The state holds the values
 # Adam made (no stale copy), and the cache is released once the TV's table is built. The full phase is the peak:
 # the background refit after it holds the full field's values beside its own but steps the object's region alone
 # (Adam's ``subsets``), and each phase starts with Dr.Jit's allocation cache released. A few percent above the
