@@ -776,6 +776,34 @@ def test_a_step_of_more_voxels_costs_the_samples_share_less_on_the_finer_stages(
     assert StepCost.timed(0.01, 64).fine == 1.0
 
 
+def test_the_step_reads_memory_as_binding_at_the_typical_vertex_count_not_the_plans_lowest():
+    """choose_step: memory binds where the grid its estimate at TYPICAL_VERTICES_PER_SURFACE_CELL allows is
+    no finer than the observations' (a whole voxel), even where the plan's lower count allows a finer one;
+    the estimate scales as 1 / sqrt(vertices a cell) (surfaces grow as R^2)."""
+    from mi_voldis.fit.schedule import (HALF_VOXEL, TYPICAL_VERTICES_PER_SURFACE_CELL, VERTICES_PER_SURFACE_CELL,
+                                        WHOLE_VOXEL, choose_step, memory_resolution, resolution_bounds)
+    survey = dict(SURVEY, surface_cells=200.0)
+    cfg = FitConfig().for_backend("llvm").replace(min_steps=0)
+    pixels, budget = 4 * 100 * 100, 30.0
+    half = default_step(cfg)
+    whole = half.marching(WHOLE_VOXEL)
+    seen = {}
+    for gib in np.geomspace(0.45, 3.0, 300):
+        c = cfg.replace(max_memory_gib=float(gib))
+        bounds = resolution_bounds(c, whole, budget, survey, pixels)
+        typical = memory_resolution(c, 200.0, 64, 64, c.sh_degree, pixels, per_cell=TYPICAL_VERTICES_PER_SURFACE_CELL)
+        assert bounds["pixels"] > bounds["observations"]  # memory and observations decide here
+        case = ("typical binds" if typical <= bounds["observations"] else "neither") + (
+            ", lowest does not" if bounds["memory"] > bounds["observations"] else "")
+        seen.setdefault(case, choose_step(c, half, budget, survey, pixels))
+    assert seen == {"typical binds": WHOLE_VOXEL, "typical binds, lowest does not": WHOLE_VOXEL,
+                    "neither, lowest does not": HALF_VOXEL}
+    c = cfg.replace(max_memory_gib=2.0)
+    lowest = memory_resolution(c, 2000.0, 64, 64, 0, pixels)
+    quarter = memory_resolution(c, 2000.0, 64, 64, 0, pixels, per_cell=4 * VERTICES_PER_SURFACE_CELL)
+    assert lowest > 128 and abs(quarter - lowest / 2) < 16
+
+
 def test_the_step_is_a_whole_voxel_where_memory_not_the_budget_bounds_the_grid(monkeypatch):
     """step_voxels 'auto': costed at a whole voxel, a plan whose grid memory bounds keeps that grid and
     buys more steps on it; one whose grid the budget's observations bound keeps half a voxel and the plan

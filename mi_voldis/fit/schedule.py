@@ -274,12 +274,16 @@ BYTES_PER_PIXEL = 22
 BYTES_PER_VERTEX = 272
 # Stored vertices per effective surface cell of the final grid, for the plan: fern 55-66 (416^3-528^3), horns
 # 81-87 (432^3-544^3), the removal family 55-195, the statue 150, garden 286 in bricks of 8; the statue 72 at
-# 552^3 in bricks of 4 (reports/notes.md, reports/experiments/2026-12-06d). The plan takes
+# 552^3 and garden 194 at 416^3 in bricks of 4 (reports/notes.md, reports/experiments/2026-12-06d, -06i). The plan takes
 # about the lowest: every stage then counts its own vertices before it allocates them
 # (:func:`mi_voldis.fit.fields.fitting_resolution`) and stops at the finest resolution within the bound, and the
 # steps it then has to spare go to that stage (:func:`rescale_after_cap`), so a guess too low costs neither memory
 # nor time, where one too high keeps a capture on a coarser grid than its memory holds.
 VERTICES_PER_SURFACE_CELL = 64
+# Whether memory binds the grid is a different question (:func:`choose_step`): there a count too low would read
+# a grid bound by memory as bound by the observations whenever the memory estimate improves. It takes the
+# median of the counts above (55, 55, 66, 72, 81, 87, 150, 194, 195, 286).
+TYPICAL_VERTICES_PER_SURFACE_CELL = 84
 
 
 def memory_scale(sh_degree, grey=False, view=False):
@@ -334,16 +338,17 @@ def affordable_vertices(cfg, pixels, sh_degree):
     return max(0.0, free / (BYTES_PER_VERTEX * memory_scale(sh_degree, cfg.sh_color == "grey", view > 0)))
 
 
-def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree, pixels):
+def memory_resolution(cfg, surface_cells, surface_resolution, coarse, sh_degree, pixels,
+                      per_cell=VERTICES_PER_SURFACE_CELL):
     """The finest resolution R (a multiple of 16, at least ``coarse``) whose estimated vertices fit in
-    :func:`affordable_vertices`: ``surface_cells`` (R / surface_resolution)^2 cells of
-    VERTICES_PER_SURFACE_CELL each, but never more than the dense lattice's R^3 (surfaces counted on a
+    :func:`affordable_vertices`: ``surface_cells`` (R / surface_resolution)^2 cells of ``per_cell``
+    vertices each, but never more than the dense lattice's R^3 (surfaces counted on a
     coarse grid that fill much of it: garden in a contracted space whose inner cube holds only what the
     cameras look at had 49,797 effective cells at 64^3, an estimate of 7.8 M vertices at 80^3, where the
     whole lattice holds 0.51 M)."""
     cells = surface_cells * (coarse / surface_resolution) ** 2  # at the coarse resolution
     vertices = affordable_vertices(cfg, pixels, sh_degree)
-    return max(_finest(coarse, (vertices / VERTICES_PER_SURFACE_CELL / cells) ** 0.5),
+    return max(_finest(coarse, (vertices / per_cell / cells) ** 0.5),
                _finest(coarse, vertices ** (1 / 3) / coarse))
 
 
@@ -394,9 +399,14 @@ def choose_step(cfg, cost, budget_seconds, survey, pixels):
     only buys a finer grid that each ray sees less of (the removal family's small scenes lost so). Where a
     rule ties with the observations, the cheaper step: the grid is then the same. Decided on the plan's
     memory estimate, not on a later cap: garden, planned at half a voxel and capped far below its plan,
-    lost on 22 of 24 held-out views at a whole voxel from the cap (reports/notes.md)."""
+    lost on 22 of 24 held-out views at a whole voxel from the cap (reports/notes.md). The memory estimate
+    here counts TYPICAL_VERTICES_PER_SURFACE_CELL, not the plan's lowest count: with the lowest, fern, horns
+    and the statue sat where memory and observations tie, and a truer bytes-a-pixel figure turned horns to
+    half voxels at a coarser grid, 0.10 dB lower (reports/experiments/2026-12-06i)."""
     bounds = resolution_bounds(cfg, cost.marching(WHOLE_VOXEL), budget_seconds, survey, pixels)
-    others = min(bounds["pixels"], bounds["memory"])
+    memory = memory_resolution(cfg, survey["surface_cells"], survey["surface_resolution"], cost.resolution,
+                               cfg.sh_degree, pixels, per_cell=TYPICAL_VERTICES_PER_SURFACE_CELL)
+    others = min(bounds["pixels"], memory)
     return WHOLE_VOXEL if bounds["observations"] >= others else HALF_VOXEL
 
 
