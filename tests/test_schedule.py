@@ -780,8 +780,15 @@ def test_the_step_reads_memory_as_binding_at_the_typical_vertex_count_not_the_pl
     """choose_step: memory binds where the grid its estimate at TYPICAL_VERTICES_PER_SURFACE_CELL allows is
     no finer than the observations' (a whole voxel), even where the plan's lower count allows a finer one;
     the estimate scales as 1 / sqrt(vertices a cell) (surfaces grow as R^2)."""
-    from mi_voldis.fit.schedule import (HALF_VOXEL, TYPICAL_VERTICES_PER_SURFACE_CELL, VERTICES_PER_SURFACE_CELL,
-                                        WHOLE_VOXEL, choose_step, memory_resolution, resolution_bounds)
+    from mi_voldis.fit.schedule import (
+        HALF_VOXEL,
+        TYPICAL_VERTICES_PER_SURFACE_CELL,
+        VERTICES_PER_SURFACE_CELL,
+        WHOLE_VOXEL,
+        choose_step,
+        memory_resolution,
+        resolution_bounds,
+    )
     survey = dict(SURVEY, surface_cells=200.0)
     cfg = FitConfig().for_backend("llvm").replace(min_steps=0)
     pixels, budget = 4 * 100 * 100, 30.0
