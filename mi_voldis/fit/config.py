@@ -116,11 +116,11 @@ class FitConfig(Settings):
     sample_ns: float | str | None = setting("auto", "with minutes 'auto', the nanoseconds a step of the last stage "
                                                      "costs per evaluated training sample, its steps counted from "
                                                      "the 100th on ('auto': the backend's, mi_voldis.fit.schedule."
-                                                     "BACKENDS: 209.1 on llvm, 1.05 on cuda; null: the stage is not "
+                                                     "BACKENDS: 268.4 on llvm, 1.05 on cuda; null: the stage is not "
                                                      "counted, its steps stay as modelled from the coarse one)",
                                             check=_null_or(_auto_or(False, above=0)))
     float_ns: float | str = setting("auto", "with minutes 'auto', the nanoseconds a step of the last stage costs per "
-                                             "stored float of the fields it steps ('auto': the backend's, 1.724 on "
+                                             "stored float of the fields it steps ('auto': the backend's, 2.014 on "
                                              "llvm, 0 on cuda)", check=_auto_or(False, low=0))
     steps_full: int | None = setting(None, "steps of the full-scene phase (null: from minutes)", low=1)
     min_steps: int = setting(3000, "with minutes 'auto', the full-scene phase runs at least this many steps, "
