@@ -11,13 +11,14 @@ from mi_voldis.render.rays import render_rays
 LAYERS = ("composite", "full", "bg", "fg")
 
 
-def gradients(integ, keys):
-    """Gradients of a random linear functional of every layer's RGB and alpha."""
+def gradients(integ, keys, rays=None):
+    """Gradients of a random linear functional of every layer's RGB and alpha (on ``rays``, default 48
+    rays along +z)."""
     params = mi.traverse(integ)
     for key in keys:
         dr.enable_grad(params[key])
     params.update()
-    o, d, u = axis_rays(48, seed=3)
+    o, d, u = rays or axis_rays(48, seed=3)
     out = render_rays(integ, o, d, u, layers=LAYERS)
     rng = np.random.default_rng(7)
     loss = sum(dr.sum(out[lay][0][c] * mi.Float(rng.normal(size=48))) for lay in LAYERS for c in range(3))
@@ -86,3 +87,66 @@ def test_mitsuba_render_adjoint_replays_the_record(monkeypatch):
     reread = grads()
     assert np.abs(recorded).max() > 0
     np.testing.assert_allclose(recorded, reread, rtol=1e-5, atol=1e-6 * np.abs(reread).max())
+
+
+def test_adjoint_order_is_by_the_primal_iterations():
+    assert march.adjoint_order(np.array([5, 2, 9, 2], np.uint32)).tolist() == [1, 3, 0, 2]
+
+
+def test_the_adjoint_replays_rays_in_order_of_length_with_the_same_gradient(monkeypatch):
+    """The adjoint replays the batch's rays sorted by how many iterations each took (SIMD packets of rays of
+    like length): the gradient is the one of the rays replayed as marched, to rounding, with and without a
+    record (whose slots each reordered ray reads as its own)."""
+    calls = []
+
+    def recorded_order(iterations):
+        order = march.adjoint_order.__wrapped__(iterations)
+        calls.append(order)
+        return order
+
+    recorded_order.__wrapped__ = march.adjoint_order
+    keys = ("full.density", "full.color", "bg.density", "bg.color")
+
+    def make():  # samples every 0.05: each ray as many as its path through the box holds
+        return integrator(random_field(1), random_field(2, scale=0.5), samples=64, step_size=0.05,
+                          fg_to_world=mi.ScalarTransform4f().translate([0.2, 0.1, 0.0]))
+
+    rng = np.random.default_rng(4)
+    start = np.column_stack([rng.uniform(-1.5, 1.5, (48, 2)), np.full(48, -3.0)])
+    d = rng.uniform(-1, 1, (48, 3)) - start
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    rays = mi.Point3f(*start.T), mi.Vector3f(*d.T), mi.Float(rng.uniform(0, 1, 48))
+
+    for record in (march.RECORD_BYTES, 0):
+        monkeypatch.setattr(march, "RECORD_BYTES", record)
+        monkeypatch.setattr(march, "adjoint_order", recorded_order)
+        sorted_replay = gradients(make(), keys, rays)
+        assert calls and not np.array_equal(calls[-1], np.arange(len(calls[-1])))  # the rays were reordered
+        monkeypatch.setattr(march, "adjoint_order", lambda iterations: None)  # replayed as marched
+        as_marched = gradients(make(), keys, rays)
+        for key in keys:
+            assert np.abs(as_marched[key]).max() > 0, key
+            np.testing.assert_allclose(sorted_replay[key], as_marched[key], rtol=1e-5,
+                                       atol=1e-6 * np.abs(as_marched[key]).max())
+
+
+def test_a_training_step_marches_its_primal_once():
+    """Forward and backward of render_rays with the distortion loss (as fitting runs them): the primal loop
+    runs in one kernel, and the adjoint's kernel reads its sums instead of marching the primal again."""
+    integ = integrator(random_field(1), random_field(2), samples=20)
+    params = mi.traverse(integ)
+    dr.enable_grad(params["full.density"])
+    params.update()
+    o, d, u = axis_rays(48, seed=3)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history()  # clears it
+        out = render_rays(integ, o, d, u, layers=("full",), distortion=("full",))
+        dr.backward(dr.sum(out["full"][1]) + dr.sum(out["distortion"]["full"]))
+        dr.eval(dr.grad(params["full.density"]))
+        irs = [e["ir"].getvalue() if hasattr(e["ir"], "getvalue") else str(e["ir"])
+               for e in dr.kernel_history() if e.get("ir") is not None]
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert sum("voldis adjoint" in ir for ir in irs) == 1
+    assert sum("voldis primal" in ir for ir in irs) == 1

@@ -124,9 +124,17 @@ def measure(resolution, samples, batch, channels=3, fields=("full",), steps=5, w
     return interleaved({"voldis": fns}, steps, {"voldis": warmup}, rounds=1)["voldis"]
 
 
+def march_kernel_ms(kernels, label):
+    """Milliseconds of the kernel history's ``kernels`` whose code holds the loop labelled ``label``."""
+    def code(h):
+        ir = h.get("ir")
+        return ir.getvalue() if hasattr(ir, "getvalue") else str(ir or "")
+    return sum(h["execution_time"] for h in kernels if label in code(h))
+
+
 def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, rays="random", record=True):
     """Where a training step's time goes, from Dr.Jit's kernel history (median ms over ``steps``):
-    the primal march kernel, the adjoint march kernel (the two kernels of ``batch`` threads), every
+    the primal march kernel, the adjoint march kernel (the kernels holding the march's loops), every
     other kernel (packing, gradients, Adam), the step's wall-clock time, ``kernel_share``: the kernels'
     time over the step's (the rest is the host's: tracing, launching, waiting), and ``compiled``: kernels
     built (not found in a cache) during the profiled steps, which should be 0. ``record=False``: the
@@ -153,10 +161,8 @@ def step_profile(resolution=128, samples=128, batch=16384, steps=5, warmup=3, ra
             dr.sync_thread()
             wall = 1e3 * (time.perf_counter() - t)
             kernels = [h for h in dr.kernel_history() if "execution_time" in h]
-            widest = [h["execution_time"] for h in kernels
-                      if h["size"] == batch and h["type"] == dr.KernelType.JIT]
             total = sum(h["execution_time"] for h in kernels)
-            primal, adjoint = widest  # the only kernels as wide as the batch
+            primal, adjoint = (march_kernel_ms(kernels, label) for label in ("voldis primal", "voldis adjoint"))
             rows.append({"primal_ms": primal, "adjoint_ms": adjoint, "other_kernels_ms": total - primal - adjoint,
                          "step_ms": wall, "msps": evaluated / wall / 1e3, "kernel_share": total / wall,
                          "compiled": sum(not h.get("cache_hit", True) for h in kernels)})

@@ -62,6 +62,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..device import from_numpy
 from ..field.grid import packet_width
 from ..transforms import apply_point, apply_vector
 from . import mixing, quadrature
@@ -393,8 +394,10 @@ def march(mode, plan, data, rays, u, active, record=None, grads=None, acc=None, 
         return i, k, b, active & path.more(i, k, b) & ~last, after, carry
 
     state = (mi.UInt32(0), mi.UInt32(0), path.start(), mi.Bool(active) & rays.hit, depth, carry)
-    *_, carry = dr.while_loop(state, lambda i, k, b, a, *_: a, body,
-                              label="voldis primal" if primal else "voldis adjoint")
+    iterations, *_, carry = dr.while_loop(state, lambda i, k, b, a, *_: a, body,
+                                          label="voldis primal" if primal else "voldis adjoint")
+    if primal:
+        carry[1]["iterations"] = iterations
     return carry if primal else None
 
 
@@ -487,6 +490,7 @@ class Forward:
     acc: dict
     stats: dict
     record: Record | None
+    order: object = None  # the rays' order for the adjoint (:func:`adjoint_order`); None: as marched
 
 
 def forward(plan, rays, u, active=True, keep_record=False, probe=None):
@@ -497,6 +501,36 @@ def forward(plan, rays, u, active=True, keep_record=False, probe=None):
     data = {id(f): dr.detach(f.packed) for f in plan.fields}
     acc, stats = march(dr.ADMode.Primal, plan, data, rays, u, active, record, probe=probe)
     return Forward(plan, rays, u, active, acc, stats, record)
+
+
+def adjoint_order(iterations):
+    """The order (NumPy indices) in which the adjoint replays a batch's rays: by the primal's loop
+    iterations per ray. A SIMD packet of rays loops until its longest ray ends, so rays of like length
+    side by side waste fewer lanes (reports/notes.md, 2026-12-07)."""
+    return np.argsort(np.asarray(iterations), kind="stable")
+
+
+def _reordered(fwd, grads):
+    """The adjoint's inputs (rays, jitter, active, primal sums, layer adjoints) in ``fwd.order``, and the
+    record reading each ray's own slots."""
+    index = from_numpy(mi.UInt32, fwd.order.astype(np.uint32))
+    dr.eval(grads)  # a gather's source must be evaluated: the layer adjoints in one kernel, not one each
+
+    def take(x):
+        if isinstance(x, (tuple, list)):
+            return type(x)(take(v) for v in x)
+        if isinstance(x, dict):
+            return {k: take(v) for k, v in x.items()}
+        if not dr.is_array_v(x) or dr.width(x) <= 1:  # a constant over the batch
+            return x
+        if dr.depth_v(x) > 1:
+            return type(x)(*(take(c) for c in x))
+        return dr.gather(type(x), x, index)
+
+    rays = Rays(*(take(getattr(fwd.rays, f)) for f in ("o", "d", "o_s", "d_s", "t0", "t1", "hit")))
+    if fwd.record is not None:
+        fwd.record.index = index
+    return rays, take(fwd.u), take(fwd.active), take(fwd.acc), take(grads)
 
 
 def backward(fwd, grads):
@@ -519,6 +553,9 @@ def backward(fwd, grads):
         largest = max(dr.width(leaf) for leaf in leaves.values())
         if dr.expand_threshold() <= largest:
             dr.set_expand_threshold(largest + 1)
-        march(dr.ADMode.Backward, plan, leaves, fwd.rays, fwd.u, fwd.active, fwd.record, grads, fwd.acc)
+        rays, u, active, acc = fwd.rays, fwd.u, fwd.active, fwd.acc
+        if fwd.order is not None:
+            rays, u, active, acc, grads = _reordered(fwd, grads)
+        march(dr.ADMode.Backward, plan, leaves, rays, u, active, fwd.record, grads, acc)
         fwd.record = None
         return {k: dr.grad(v) if dr.grad_enabled(v) else None for k, v in leaves.items()}

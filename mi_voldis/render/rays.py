@@ -20,10 +20,13 @@ class _RenderRays(dr.CustomOp):
         self.sums = layer_io.raw_sums(plan, self.fwd.acc)
         out = layer_io.finalize(self.sums)
         out.update(self.fwd.stats)  # per-ray statistics, not differentiable
+        iterations = out.pop("iterations")
         if plan.distortion_chains:
             out["distortion"] = {layer: march.distortion_value(self.fwd.acc[march.dist_name(c)])
                                  for layer, c in plan.distortion_chains.items()}
-        dr.eval(out)
+        dr.eval(out, iterations, self.fwd.acc)  # one kernel: loop outputs evaluated apart would run it again
+        if tracked:
+            self.fwd.order = march.adjoint_order(iterations)
         return out
 
     def backward(self):
