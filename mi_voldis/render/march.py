@@ -14,9 +14,12 @@ the occupancy grid marks empty it takes steps of one cell (``skip``), which cann
 dilation around occupied cells, so no dense feature is stepped over. A ray stops after ``samples``
 evaluated samples there.
 
-The adjoint replays the march front to back (as Mitsuba's PRB integrators do). The lookups' raw
+The adjoint replays the march front to back (as Mitsuba's PRB integrators do), reading the primal's
+sums (evaluated with its outputs, so the adjoint's kernel does not march the primal again), and may replay
+a batch's rays in another order (:func:`adjoint_order`: by the primal's iterations per ray, so that a SIMD
+packet holds rays of like length; the gradient is the same, summed in another order). The lookups' raw
 values at every evaluated sample can be recorded by the primal (:class:`Record`, 16 bytes per sample
-and lookup for RGB fields, kept up to RECORD_BYTES): the replay then reads them in contiguous runs
+and lookup for RGB fields, kept up to RECORD_BYTES): the replay then reads them (one packet a sample)
 instead of gathering the 8 grid corners again, and only the gradient scatters touch the grids.
 Without a record the replay reads the grids, and memory does not grow with the number of samples.
 
@@ -290,8 +293,8 @@ def _sample(plan, data, p, d, active, raw=None):
 class Record:
     """The raw values of every lookup at every evaluated sample of a primal march, for its adjoint to
     replay instead of reading the grids again. The k-th evaluated sample of ray r sits at slot
-    k * rays + r, so that a SIMD packet of neighbouring rays writes and reads one contiguous run;
-    ``samples``: the most any ray evaluates."""
+    k * rays + r, so that a SIMD packet of neighbouring rays writes one contiguous run; ``index``: the ray
+    each lane reads (the adjoint's order); ``samples``: the most any ray evaluates."""
 
     def __init__(self, plan, rays, samples):
         self.rays = rays
@@ -514,7 +517,7 @@ def _reordered(fwd, grads):
     """The adjoint's inputs (rays, jitter, active, primal sums, layer adjoints) in ``fwd.order``, and the
     record reading each ray's own slots."""
     index = from_numpy(mi.UInt32, fwd.order.astype(np.uint32))
-    dr.eval(grads)  # a gather's source must be evaluated: the layer adjoints in one kernel, not one each
+    dr.eval(grads)  # a gather's source must be evaluated
 
     def take(x):
         if isinstance(x, (tuple, list)):
