@@ -59,6 +59,7 @@ there outweighs the few other views that see it from afar; the factor evens out 
 gradients, and the floaters a view grows just in front of itself, which the other views cannot undo,
 no longer form. The primal, and so the loss, is unchanged; every term's gradient is scaled alike.
 """
+import dataclasses
 from dataclasses import dataclass
 
 import drjit as dr
@@ -517,7 +518,6 @@ def _reordered(fwd, grads):
     """The adjoint's inputs (rays, jitter, active, primal sums, layer adjoints) in ``fwd.order``, and the
     record reading each ray's own slots."""
     index = from_numpy(mi.UInt32, fwd.order.astype(np.uint32))
-    dr.eval(grads)  # a gather's source must be evaluated
 
     def take(x):
         if isinstance(x, (tuple, list)):
@@ -530,7 +530,7 @@ def _reordered(fwd, grads):
             return type(x)(*(take(c) for c in x))
         return dr.gather(type(x), x, index)
 
-    rays = Rays(*(take(getattr(fwd.rays, f)) for f in ("o", "d", "o_s", "d_s", "t0", "t1", "hit")))
+    rays = Rays(*(take(getattr(fwd.rays, f.name)) for f in dataclasses.fields(Rays)))
     if fwd.record is not None:
         fwd.record.index = index
     return rays, take(fwd.u), take(fwd.active), take(fwd.acc), take(grads)
