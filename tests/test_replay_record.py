@@ -138,15 +138,47 @@ def test_a_training_step_marches_its_primal_once():
     dr.enable_grad(params["full.density"])
     params.update()
     o, d, u = axis_rays(48, seed=3)
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    try:
-        dr.kernel_history()  # clears it
+
+    def step():
         out = render_rays(integ, o, d, u, layers=("full",), distortion=("full",))
         dr.backward(dr.sum(out["full"][1]) + dr.sum(out["distortion"]["full"]))
         dr.eval(dr.grad(params["full.density"]))
-        irs = [e["ir"].getvalue() if hasattr(e["ir"], "getvalue") else str(e["ir"])
-               for e in dr.kernel_history() if e.get("ir") is not None]
-    finally:
-        dr.set_flag(dr.JitFlag.KernelHistory, False)
+
+    irs = kernels(step)
     assert sum("voldis adjoint" in ir for ir in irs) == 1
     assert sum("voldis primal" in ir for ir in irs) == 1
+
+
+def kernels(run):
+    """The IR of every kernel Dr.Jit compiles or launches while ``run()`` runs."""
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history()  # clears it
+        run()
+        return [e["ir"].getvalue() if hasattr(e["ir"], "getvalue") else str(e["ir"])
+                for e in dr.kernel_history() if e.get("ir") is not None]
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+
+
+def test_mitsuba_render_adjoint_marches_no_primal_inside_it():
+    """mi.render's adjoint (``render_backward``) marches the primal once more for its record, as Mitsuba's
+    PRB integrators do, and its adjoint kernel reads those sums instead of marching the primal a third time."""
+    from helpers import ortho_scene
+
+    scene = ortho_scene({"type": "voldis", "samples": 12, "full": random_field(3), "bg": random_field(4)},
+                        size=6, spp=2)
+    params = mi.traverse(scene)
+    dr.enable_grad(params["integrator.full.density"])
+    params.update()
+
+    def render_and_backward():
+        image = mi.render(scene, params, seed=1)
+        dr.backward(dr.sum(image.array))
+        dr.eval(dr.grad(params["integrator.full.density"]))
+
+    irs = kernels(render_and_backward)
+    adjoint = [ir for ir in irs if "voldis adjoint" in ir]
+    assert len(adjoint) == 1
+    assert "voldis primal" not in adjoint[0]
+    assert sum("voldis primal" in ir for ir in irs) == 2  # the image's, and the record's for the adjoint

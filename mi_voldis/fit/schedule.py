@@ -89,8 +89,9 @@ class Backend:
 # the earlier stages' departures from their model are all priced in the steps the count buys; the fitted rates
 # are then scaled until no fit's step is costed below what it took (the dearest: fern's slower run, 1.17x the
 # fitted rates), so that their plans end within their budgets in the slower hours of a shared machine, early
-# rather than late (reports/notes.md, "The plan's rates from whole fits"). Captures past 12 M training pixels (garden: 42 M) get more than 10 minutes, as issue #42's time
-# targets do (10 minutes for fern, horns and the statue, 3-10 M pixels, 15 for garden). cuda: one H200
+# rather than late (reports/notes.md, "The plan's rates from whole fits"). Captures past 12 M training pixels
+# (garden: 42 M) get more than 10 minutes, as issue #42's time targets do (10 minutes for fern, horns and the
+# statue, 3-10 M pixels, 15 for garden). cuda: one H200
 # (reports/gpu.md): a fit's step took 4.9-5.1 ms plus 1.0-1.1 ms per million samples, fern, the statue and
 # garden alike, from 1 M to 4 M samples a step, so its host's share is fixed and its kernels run about 1000 M
 # samples/s, its vertices not apart from them; 32 GiB of the card's memory (an H100 has 80); its budget's

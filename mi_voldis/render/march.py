@@ -544,6 +544,9 @@ def backward(fwd, grads):
     ``packed`` array tracks gradients), so the AD traversal inside the loop stops there; callers hand
     the result on to the fields' parameters."""
     plan = fwd.plan
+    # The primal's sums, evaluated with its record's writes in one kernel (a no-op where the caller evaluated
+    # them with its outputs): left lazy, the adjoint's kernel would march the primal again to get them.
+    dr.eval(fwd.acc)
     with dr.resume_grad():
         leaves = {}
         for f in plan.fields:
