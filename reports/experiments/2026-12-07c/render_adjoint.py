@@ -25,12 +25,12 @@ scene = ortho_scene({"type": "voldis", "samples": 128, "full": random_field(3, (
 params = mi.traverse(scene)
 dr.enable_grad(params["integrator.full.density"])
 params.update()
-weights = mi.Float(np.random.default_rng(2).normal(size=128 * 128 * 3).astype(np.float32))
 times = []
 for k in range(6):
     dr.set_grad(params["integrator.full.density"], 0.0)
     t = time.perf_counter()
     image = mi.render(scene, params, seed=k)
+    weights = mi.Float(np.random.default_rng(2).normal(size=dr.width(image.array)).astype(np.float32))
     dr.backward(dr.sum(image.array * weights))
     dr.eval(dr.grad(params["integrator.full.density"]))
     dr.sync_thread()
