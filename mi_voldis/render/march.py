@@ -15,9 +15,10 @@ dilation around occupied cells, so no dense feature is stepped over. A ray stops
 evaluated samples there.
 
 The adjoint replays the march front to back (as Mitsuba's PRB integrators do), reading the primal's
-sums (evaluated with its outputs, so the adjoint's kernel does not march the primal again), and may replay
-a batch's rays in another order (:func:`adjoint_order`: by the primal's iterations per ray, so that a SIMD
-packet holds rays of like length; the gradient is the same, summed in another order). The lookups' raw
+sums (evaluated before the replay, with the primal's outputs or its record's writes, so the adjoint's
+kernel does not march the primal again), and may replay a batch's rays in another order
+(:func:`adjoint_order`: by the primal's iterations per ray, so that a SIMD packet holds rays of like
+length; the gradient is the same, summed in another order). The lookups' raw
 values at every evaluated sample can be recorded by the primal (:class:`Record`, 16 bytes per sample
 and lookup for RGB fields, kept up to RECORD_BYTES): the replay then reads them (one packet a sample)
 instead of gathering the 8 grid corners again, and only the gradient scatters touch the grids.
