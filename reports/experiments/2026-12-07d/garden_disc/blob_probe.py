@@ -6,35 +6,20 @@ kept in OUT/state.npz.
 
     python blob_probe.py RUN OUT DATA
 """
-# ruff: noqa: E402
 import os
 import sys
 
 import numpy as np
 
-import mi_voldis  # noqa: F401
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from kept_background import kept_background, region_lookup  # noqa: E402
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "2026-11-30b"))
-import mitsuba as mi
-from probe_run import load_run
-
-from mi_voldis.bench.strategies import refit_config
-from mi_voldis.cameras import pixel_rays
-from mi_voldis.fit.background import background_regions
-from mi_voldis.fit.fields import fit_integrator
-from mi_voldis.fit.train import fit
-from mi_voldis.render.surface import median_points
+from mi_voldis.cameras import pixel_rays  # noqa: E402
+from mi_voldis.render.surface import median_points  # noqa: E402
 
 run, out, data = sys.argv[1], sys.argv[2], sys.argv[3]
-cfg = refit_config(run, "guided")
-_, ds, _, _ = load_run(run, data)
-inputs, state = fit(ds, os.path.join(out, "state.npz"), cfg, resume=True, progress=False)
-integrator = fit_integrator(inputs, state)
-full = state.fields["full"]
-hull, _, obj, refill = background_regions(inputs, state)
-region = np.where(np.array(obj), 3, np.where(np.array(refill), 2, np.where(np.array(hull) > 0, 1, 0)))
-to_local = np.linalg.inv(full.to_world)
-span = np.array(full.shape) - 1
+ds, inputs, state, integrator = kept_background(run, out, data)
+lookup = region_lookup(inputs, state)
 cam = ds.cameras[8]
 windows = {"blob": (205, 255, 285, 315), "plate above it": (205, 255, 245, 265), "wood below": (205, 255, 345, 365)}
 for name, (x0, x1, y0, y1) in windows.items():
@@ -44,11 +29,7 @@ for name, (x0, x1, y0, y1) in windows.items():
     for layer in ("bg", "full"):
         med, hit = median_points(integrator, o, d, layer=layer)
         t = np.linalg.norm(med - o, axis=1)
-        scene = np.array(inputs.space.from_world_np(med[hit]))
-        local = scene @ to_local[:3, :3].T + to_local[:3, 3]
-        ijk = np.clip(np.rint(local * span), 0, span).astype(np.uint32)
-        idx = np.array(full.layout.address(mi.UInt32(ijk[:, 0]), mi.UInt32(ijk[:, 1]), mi.UInt32(ijk[:, 2])))
-        c = np.bincount(region[idx], minlength=4)
+        c = np.bincount(lookup(np.array(inputs.space.from_world_np(med[hit]))), minlength=4)
         lo, hi = np.percentile(t[hit], 10), np.percentile(t[hit], 90)
         print(f"{name} {layer}: median depth {np.median(t[hit]):.3f} (10-90%: {lo:.3f}-{hi:.3f}); "
               f"median point world {np.round(np.median(med[hit], 0), 3)}; regions out/kept/refilled/object "

@@ -10,45 +10,23 @@ above green) in the rendered layer; the rest (grass, bushes, paving) is left out
 
     python disc_haze.py RUN OUT DATA VIEWS
 """
-# ruff: noqa: E402
 import os
-import shutil
 import sys
 
 import numpy as np
 
-import mi_voldis  # noqa: F401
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from kept_background import kept_background  # noqa: E402
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "2026-11-30b"))
-from probe_run import load_run
-
-from mi_voldis.bench.strategies import refit_config
-from mi_voldis.fit.fields import fit_integrator
-from mi_voldis.fit.state import FitState
-from mi_voldis.fit.train import fit
-from mi_voldis.metrics import dilate, score_dilation
-from mi_voldis.optim.adam import Adam
-from mi_voldis.render.surface import front_weight
-from mi_voldis.render.views import render_camera
+from mi_voldis.metrics import dilate, score_dilation  # noqa: E402
+from mi_voldis.render.surface import front_weight  # noqa: E402
+from mi_voldis.render.views import render_camera  # noqa: E402
 
 run, out, data, views = sys.argv[1], sys.argv[2], sys.argv[3], [int(v) for v in sys.argv[4].split(",")]
-kept = os.path.join(out, "state.npz")
 if os.path.exists(out) and set(os.listdir(out)) - {"state.npz"}:
     raise SystemExit(f"error: {out}: holds files this probe did not write")
 os.makedirs(out, exist_ok=True)
-cfg = refit_config(run, "guided")
-_, ds, _, _ = load_run(run, data)
-if not os.path.exists(kept):
-    state = FitState.load(os.path.join(run, "checkpoints", "last.npz"), Adam({}, cfg.adam_beta1, cfg.adam_beta2))
-    state.fields.pop("bg", None)
-    state.hull_points = state.prior = state.prior_keys = state.occupancy = None
-    state.adam.reset()
-    work = os.path.join(out, "work.npz")
-    state.save(work, "bg", 0)
-    fit(ds, work, cfg, resume=True, progress=False)
-    shutil.move(work, kept)
-inputs, state = fit(ds, kept, cfg, resume=True, progress=False)
-integrator = fit_integrator(inputs, state)
+ds, inputs, state, integrator = kept_background(run, out, data)
 dil = score_dilation(ds.size)
 ring_px = int(np.ceil(0.03 * np.hypot(*ds.size)))
 

@@ -8,7 +8,6 @@ the background layer's colour as in `disc_haze.py`) and for all of it.
 
     python front_regions.py RUN OUT DATA VIEWS
 """
-# ruff: noqa: E402
 import os
 import sys
 
@@ -16,33 +15,20 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-import mi_voldis  # noqa: F401
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from kept_background import REGIONS, kept_background, region_lookup  # noqa: E402
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "2026-11-30b"))
-from probe_run import load_run
-
-from mi_voldis.bench.strategies import refit_config
-from mi_voldis.cameras import pixel_rays
-from mi_voldis.device import from_numpy
-from mi_voldis.fit.background import background_regions
-from mi_voldis.fit.fields import fit_integrator
-from mi_voldis.fit.train import fit
-from mi_voldis.metrics import dilate, score_dilation
-from mi_voldis.render import march
-from mi_voldis.render.surface import median_points
-from mi_voldis.render.views import render_camera
+from mi_voldis.cameras import pixel_rays  # noqa: E402
+from mi_voldis.device import from_numpy  # noqa: E402
+from mi_voldis.metrics import dilate, score_dilation  # noqa: E402
+from mi_voldis.render import march  # noqa: E402
+from mi_voldis.render.surface import median_points  # noqa: E402
+from mi_voldis.render.views import render_camera  # noqa: E402
 
 run, out, data, views = sys.argv[1], sys.argv[2], sys.argv[3], [int(v) for v in sys.argv[4].split(",")]
-cfg = refit_config(run, "guided")
-_, ds, _, _ = load_run(run, data)
-inputs, state = fit(ds, os.path.join(out, "state.npz"), cfg, resume=True, progress=False)
-integrator = fit_integrator(inputs, state)
-full = state.fields["full"]
-hull, _, obj, refill = background_regions(inputs, state)
-region = np.where(np.array(obj), 3, np.where(np.array(refill), 2, np.where(np.array(hull) > 0, 1, 0)))
-names = ("outside the hull", "kept hull", "refilled", "object's")
-to_local = np.linalg.inv(full.to_world)
-span = np.array(full.shape) - 1
+ds, inputs, state, integrator = kept_background(run, out, data)
+lookup = region_lookup(inputs, state)
+names = REGIONS
 plan = integrator.plan(("bg",))
 cb = plan.sources.bg
 dil = score_dilation(ds.size)
@@ -68,13 +54,9 @@ for v in views:
     share = np.zeros((len(o), 4))
     for p, w, active in samples:
         p = p.T if p.shape[0] == 3 else p
-        world = np.array(plan.space.to_world_np(p)) if hasattr(plan.space, "to_world_np") else p
+        world = np.array(plan.space.to_world_np(p))
         front = active & (np.linalg.norm(world - o, axis=1) < reach)
-        local = p @ to_local[:3, :3].T + to_local[:3, 3]
-        ijk = np.clip(np.rint(local * span), 0, span).astype(np.uint32)
-        idx = np.array(full.layout.address(mi.UInt32(ijk[:, 0]), mi.UInt32(ijk[:, 1]), mi.UInt32(ijk[:, 2]),
-                                           mi.Bool(front)))
-        np.add.at(share, (np.arange(len(o)), region[np.where(front, idx, 0)]), np.where(front, w, 0.0))
+        np.add.at(share, (np.arange(len(o)), lookup(p, front)), np.where(front, w, 0.0))
     c = rgb[py, px]
     kinds = {"metal": (c[:, 2] >= c[:, 0]) & hit, "wood": (c[:, 0] > c[:, 2] + 0.03) & (c[:, 0] > c[:, 1]) & hit,
              "all": hit}
