@@ -212,8 +212,46 @@ def allocate_hidden_surface(inputs, state, depth, stride=2):
     return resample(full, None, need | (full.layout.table > 0))
 
 
+def hull_bricks(inputs, layout, to_world):
+    """The bricks (bz, by, bx Bools) of ``layout`` (a brick lattice over the box ``to_world`` maps the unit
+    cube to) a corner of which lies in the visual hull of the masked training views (masks dilated by
+    ``hull_dilation``, as :func:`hull_region`'s)."""
+    cfg, ds = inputs.cfg, inputs.ds
+    b = layout.brick
+    span = np.array(layout.shape) - 1  # (X, Y, Z) vertices - 1
+    nz, ny, nx = layout.table.shape
+    # the corners of the bricks: vertex c * b along each axis, the last one clipped to the lattice
+    axes = [np.minimum(np.arange(n + 1) * b, span[a]) / span[a] for a, n in enumerate((nx, ny, nz))]
+    k, j, i = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+    local = np.stack([i.ravel(), j.ravel(), k.ravel()], -1)
+    scene = local @ to_world[:3, :3].T + to_world[:3, 3]
+    px = int(np.ceil(cfg.hull_dilation * np.hypot(*ds.size)))
+    corner = visual_hull(inputs.space.to_world_np(scene), [ds.cameras[v] for v in ds.masked_train],
+                         ds.masks[ds.masked_train], px, cfg.hull_min_views).reshape(nz + 1, ny + 1, nx + 1)
+    need = np.zeros(layout.table.shape, bool)
+    for dz in (0, 1):
+        for dy in (0, 1):
+            for dx in (0, 1):
+                need |= corner[dz:dz + nz, dy:dy + ny, dx:dx + nx]
+    return need
+
+
+def allocate_hull(inputs, field):
+    """``field`` with empty bricks allocated wherever the object's visual hull reaches (:func:`hull_bricks`).
+    The fit stores bricks where training rays end, with a brick's margin about them
+    (:func:`~mi_voldis.field.state.carve`); inside the object no ray ends, so what it hides (the floor under
+    it, a wall behind it) is stored only where that margin reaches, which smaller bricks make thinner. The
+    background can change only stored vertices: elsewhere in the hole it would render what lies beyond, or
+    nothing. Empty bricks leave the field's renders as they were (to the rounding of the resampled values)."""
+    need = hull_bricks(inputs, field.layout, field.to_world)
+    if not (need & (field.layout.table == 0)).any():
+        return field
+    return resample(field, None, need | (field.layout.table > 0))
+
+
 def start_harmonic(inputs, state, depths=None):
-    """Background = full field with the object's visual hull inpainted from around it: a harmonic extension of density
+    """Background = full field with the object's visual hull, stored in full (:func:`allocate_hull`), inpainted from
+    around it: a harmonic extension of density
     and colour, along the horizontal by default (:func:`fill_weights`), so surfaces the object hides (the floor
     under it) continue through the hull, except in the object's own voxels (:func:`background_regions`), whose
     density is emptied so that w_fg = w_full - w_bg keeps the whole object; then L_bg refits what some view
@@ -225,6 +263,7 @@ def start_harmonic(inputs, state, depths=None):
     (:func:`density_ceiling`).
     ``depths``: the full field's median depth maps by view, read and filled
     (:func:`~mi_voldis.fit.lift.training_depths`)."""
+    state.fields["full"] = allocate_hull(inputs, state.fields["full"])  # room for what the object hides
     if inputs.cfg.hole_carve:  # room for the hidden surface where no training ray ended
         from .lift import training_depths
         state.fields["full"] = allocate_hidden_surface(inputs, state, training_depths(inputs, state, median=True))
