@@ -1,0 +1,10 @@
+#!/bin/bash
+# git bisect run helper: fit family15 (SPIn-NeRF layout) at the checked-out commit; good if the fit's bg_psnr_mask > 21.0
+export DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so
+h=$(git rev-parse --short HEAD)
+out=/work/runs/s64/bis/run_$h
+rm -rf /work/runs/s64/bis/run_$h /work/runs/s64/bis/run_$h.partial
+PYTHONPATH=$PWD timeout 1200 /work/main/.venv/bin/python scripts/train.py /work/runs/s63/spin/data/family15_spinnerf --out $out --quiet > /work/runs/s64/bis/log_$h.txt 2>&1 || exit 125
+v=$(python3 -c "import json;print(json.load(open('$out/metrics.json'))['held_out']['bg_psnr_mask'])") || exit 125
+echo "$h $v" >> /work/runs/s64/bis/results.txt
+python3 -c "import sys;sys.exit(0 if $v > 20.9 else 1)"
