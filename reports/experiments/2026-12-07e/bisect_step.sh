@@ -1,5 +1,5 @@
 #!/bin/bash
-# git bisect run helper: fit family15 (SPIn-NeRF layout) at the checked-out commit; good if the fit's bg_psnr_mask > 21.0
+# git bisect run helper: fit family15 (SPIn-NeRF layout) at the checked-out commit; good if the fit's bg_psnr_mask > 20.9
 export DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so
 h=$(git rev-parse --short HEAD)
 out=/work/runs/s64/bis/run_$h
