@@ -10,49 +10,33 @@ is white), and prints the mean weight per region inside the scored hole.
 import os
 import sys
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 from PIL import Image
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "2026-12-07d", "garden_disc"))
-from kept_background import REGIONS, kept_background, region_lookup  # noqa: E402
+from kept_background import REGIONS, kept_background, region_lookup, region_weights  # noqa: E402
 
 from mi_voldis.cameras import pixel_rays  # noqa: E402
-from mi_voldis.device import from_numpy  # noqa: E402
 from mi_voldis.metrics import dilate, score_dilation  # noqa: E402
-from mi_voldis.render import march  # noqa: E402
 from mi_voldis.render.views import render_camera  # noqa: E402
 
 if len(sys.argv) != 5:
     raise SystemExit("usage: python ghost_regions.py RUN OUT DATA VIEWS")
 run, out, data, views = sys.argv[1], sys.argv[2], sys.argv[3], [int(v) for v in sys.argv[4].split(",")]
+if os.path.realpath(out) in (os.path.realpath(run), os.path.realpath(data)):
+    raise SystemExit(f"error: OUT {out} is the run or the dataset; give a folder of its own")
 for v in views:
     if os.path.exists(os.path.join(out, f"regions_{v:03d}.png")):
         raise SystemExit(f"error: {out}/regions_{v:03d}.png exists; give another OUT")
 ds, inputs, state, integrator = kept_background(run, out, data)
 lookup = region_lookup(inputs, state)
-plan = integrator.plan(("bg",))
-cb = plan.sources.bg
-dr.set_flag(dr.JitFlag.SymbolicLoops, False)  # the probe runs once an iteration, on evaluated arrays
 for v in views:
     cam = ds.cameras[v]
     hole = dilate(ds.masks[v], score_dilation(ds.size))
     rgb = np.clip(ds.as_photographed(render_camera(integrator, cam, ("bg",))["bg"]), 0, 1)
     py, px = np.mgrid[0:cam.height, 0:cam.width]
     o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
-    samples = []
-
-    def probe(p, w, active, _depth):
-        samples.append((np.array(p), np.array(w[cb]), np.array(active)))
-
-    with dr.suspend_grad():
-        rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o), from_numpy(mi.Vector3f, d))
-        march.forward(plan, rays, dr.full(mi.Float, 0.5, len(o)), probe=probe)
-    share = np.zeros((len(o), 4))
-    for p, w, active in samples:
-        p = p.T if p.shape[0] == 3 else p
-        np.add.at(share, (np.arange(len(o)), lookup(p, active)), np.where(active, w, 0.0))
+    share = region_weights(integrator, lookup, o, d)
     share = share.reshape(cam.height, cam.width, 4)
     print(f"view {v}, hole ({hole.sum()} px): " + ", ".join(f"{n} {x:.3f}" for n, x in
                                                           zip(REGIONS, share[hole].mean(0))), flush=True)

@@ -11,17 +11,13 @@ the background layer's colour as in `disc_haze.py`) and for all of it.
 import os
 import sys
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from kept_background import REGIONS, kept_background, region_lookup  # noqa: E402
+from kept_background import REGIONS, kept_background, region_lookup, region_weights  # noqa: E402
 
 from mi_voldis.cameras import pixel_rays  # noqa: E402
-from mi_voldis.device import from_numpy  # noqa: E402
 from mi_voldis.metrics import dilate, score_dilation  # noqa: E402
-from mi_voldis.render import march  # noqa: E402
 from mi_voldis.render.surface import median_points  # noqa: E402
 from mi_voldis.render.views import render_camera  # noqa: E402
 
@@ -29,10 +25,7 @@ run, out, data, views = sys.argv[1], sys.argv[2], sys.argv[3], [int(v) for v in 
 ds, inputs, state, integrator = kept_background(run, out, data)
 lookup = region_lookup(inputs, state)
 names = REGIONS
-plan = integrator.plan(("bg",))
-cb = plan.sources.bg
 dil = score_dilation(ds.size)
-dr.set_flag(dr.JitFlag.SymbolicLoops, False)  # the probe runs once an iteration, on evaluated arrays
 totals = {k: np.zeros(4) for k in ("metal", "wood", "all")}
 counts = {k: 0 for k in totals}
 for v in views:
@@ -43,20 +36,8 @@ for v in views:
     o, d = pixel_rays(cam, px + 0.5, py + 0.5)
     med, hit = median_points(integrator, o, d, layer="bg")
     reach = np.where(hit, 0.9 * np.linalg.norm(med - o, axis=1), 0.0)
-    samples = []
-
-    def probe(p, w, active, _depth):
-        samples.append((np.array(p), np.array(w[cb]), np.array(active)))
-
-    with dr.suspend_grad():
-        rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o), from_numpy(mi.Vector3f, d))
-        march.forward(plan, rays, dr.full(mi.Float, 0.5, len(o)), probe=probe)
-    share = np.zeros((len(o), 4))
-    for p, w, active in samples:
-        p = p.T if p.shape[0] == 3 else p
-        world = np.array(plan.space.to_world_np(p))
-        front = active & (np.linalg.norm(world - o, axis=1) < reach)
-        np.add.at(share, (np.arange(len(o)), lookup(p, front)), np.where(front, w, 0.0))
+    share = region_weights(integrator, lookup, o, d,
+                           lambda world, active: active & (np.linalg.norm(world - o, axis=1) < reach))
     c = rgb[py, px]
     kinds = {"metal": (c[:, 2] >= c[:, 0]) & hit, "wood": (c[:, 0] > c[:, 2] + 0.03) & (c[:, 0] > c[:, 1]) & hit,
              "all": hit}

@@ -35,6 +35,8 @@ def kept_background(run, out, data):
         state.hull_points = state.prior = state.prior_keys = state.occupancy = None
         state.adam.reset()
         work = os.path.join(out, "work.npz")
+        if os.path.lexists(work):
+            raise SystemExit(f"error: {work} exists and is not this probe's state; give another OUT")
         state.save(work, "bg", 0)
         fit(ds, work, cfg, resume=True, progress=False)
         shutil.move(work, kept)
@@ -60,3 +62,31 @@ def region_lookup(inputs, state):
         return region[np.where(active, idx, 0)]
 
     return lookup
+
+
+def region_weights(integrator, lookup, o, d, keep=None):
+    """Per ray (``o``, ``d``: NumPy (n, 3) world origins and unit directions) the weight of the integrator's
+    background layer by region (n, len(:data:`REGIONS`)): each sample of its march put in the region ``lookup``
+    (:func:`region_lookup`) gives the nearest stored vertex. ``keep(world points (n, 3), active Bools)``: the
+    samples counted (default: every active one)."""
+    import drjit as dr
+
+    from mi_voldis.device import from_numpy
+    from mi_voldis.render import march
+    plan = integrator.plan(("bg",))
+    cb = plan.sources.bg
+    dr.set_flag(dr.JitFlag.SymbolicLoops, False)  # the probe runs once an iteration, on evaluated arrays
+    samples = []
+
+    def probe(p, w, active, _depth):
+        samples.append((np.array(p), np.array(w[cb]), np.array(active)))
+
+    with dr.suspend_grad():
+        rays = march.prepare_rays(plan, from_numpy(mi.Point3f, o), from_numpy(mi.Vector3f, d))
+        march.forward(plan, rays, dr.full(mi.Float, 0.5, len(o)), probe=probe)
+    share = np.zeros((len(o), len(REGIONS)))
+    for p, w, active in samples:
+        p = p.T if p.shape[0] == 3 else p
+        counted = active if keep is None else keep(np.array(plan.space.to_world_np(p)), active)
+        np.add.at(share, (np.arange(len(o)), lookup(p, counted)), np.where(counted, w, 0.0))
+    return share
