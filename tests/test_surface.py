@@ -1,5 +1,5 @@
 """Where rays end (mi_voldis.render.surface): the median depth of a wall, and the weight a slab of fog
-in front of it takes, against the Beer-Lambert values."""
+in front of it takes, against the Beer-Lambert values, in all and by band of distance from the wall."""
 import mitsuba as mi
 import numpy as np
 import pytest
@@ -8,7 +8,7 @@ import mi_voldis  # noqa: F401
 from mi_voldis.cameras import Camera, pixel_rays
 from mi_voldis.device import from_numpy
 from mi_voldis.field.state import new_field, vertex_positions
-from mi_voldis.render.surface import front_weight, median_depth
+from mi_voldis.render.surface import front_weight, median_depth, weight_bands
 from mi_voldis.scene import build_integrator, integrator_properties
 from mi_voldis.space import SceneSpace
 from mi_voldis.synth.rigs import look_at
@@ -61,6 +61,38 @@ def test_the_median_depth_is_the_wall_and_the_fog_in_front_weighs_as_beer_lamber
     else:
         assert front.mean() > 0.4  # about 1 - exp(-0.8 * 0.7) = 0.43
 
+
+
+@pytest.mark.parametrize("sigma_fog", [0.0, SIGMA])
+def test_the_weight_by_band_of_distance_puts_the_wall_on_its_surface_and_the_fog_far_in_front(sigma_fog):
+    """Bands of t / t_wall, t_wall the exact distance to the wall's face along each ray: the wall's weight
+    (its density ramps up across the voxel in front of its face, a voxel = 1.4% of the distance) lies within
+    2% of it; the fog's (z in [-1, FOG_END], at most 0.8 of the wall's distance) all below 0.9, as much as
+    Beer-Lambert gives it; the bands sum to the ray's opacity. A pixel without a reference gets none."""
+    integrator, camera = wall_behind_fog(sigma_fog)
+    py, px = np.mgrid[0:camera.height, 0:camera.width]
+    o, d = pixel_rays(camera, px.ravel() + 0.5, py.ravel() + 0.5)
+    wall = ((WALL_Z - o[:, 2]) / d[:, 2]).reshape(camera.height, camera.width)
+    reference = wall.copy()
+    reference[0, 0] = np.nan
+    bands = weight_bands(integrator, camera, reference, (0.9, 0.98, 1.02))
+    assert bands.shape == (camera.height, camera.width, 4)
+    assert np.all(bands[0, 0] == 0.0)
+    rest = np.ones(wall.shape, bool)
+    rest[0, 0] = False
+    _, alpha, _ = render_full(integrator, camera)
+    assert np.abs(bands.sum(-1)[rest] - alpha[rest]).max() < 1e-4
+    cos = d[:, 2].reshape(camera.height, camera.width)
+    fog = 1.0 - np.exp(-sigma_fog * (FOG_END + 1.0 + np.array([0.0, VOXEL]))[:, None, None] / cos)
+    far = bands[..., 0][rest]
+    assert (far >= fog[0][rest] - 2e-3).all() and (far <= fog[1][rest] + 2e-3).all(), (far.min(), far.max())
+    assert bands[..., 1][rest].max() < 1e-3 and bands[..., 3][rest].max() < 1e-3
+    assert np.abs(bands[..., 2][rest] - (1.0 - far)).max() < 2e-3
+
+
+def render_full(integrator, camera):
+    from mi_voldis.render.views import render_camera
+    return render_camera(integrator, camera, ("full",))["full"]
 
 def wall_and_box(with_box):
     """Fields over [-1, 1]^3: the opaque wall at z >= WALL_Z, with ``with_box`` an opaque box in front of

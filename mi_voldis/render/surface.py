@@ -5,7 +5,10 @@ half. Unlike the expected depth it is not pulled towards the camera or the far b
 and half-transparent voxels, so the surfaces of different views agree (masks, visibility, priors).
 The weight a ray spends well in front of it, sum_i w_i [t_i < (1 - margin) t_med], is haze or
 floaters: light the field explains with a semi-transparent veil instead of the surface, which both
-fields share, so the foreground w_fg = w_full - w_bg behind it is that much fainter.
+fields share, so the foreground w_fg = w_full - w_bg behind it is that much fainter. Against a known
+surface (a synthetic scene's ground truth) the weight splits by band of distance relative to it
+(:func:`weight_bands`): how much of each ray's opacity the field puts on the surface, and how much in
+front of it.
 """
 import drjit as dr
 import mitsuba as mi
@@ -79,6 +82,42 @@ def front_weight(integrator, camera, margin=0.1, chunk=CHUNK, layer="full"):
             march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
             out[s:s + n] = np.array(total)
     return out.reshape(camera.height, camera.width), hit.reshape(camera.height, camera.width)
+
+
+def weight_bands(integrator, camera, reference, edges, chunk=CHUNK, layer="full"):
+    """Per pixel of ``camera`` (H, W, len(``edges``) + 1): ``layer``'s field's ('full' or 'bg') weight on
+    its ray by band of t / t_ref, t the sample's distance along the ray and t_ref the pixel's distance in
+    ``reference`` (H, W; e.g. the true surface's): band k sums w_i over e_(k-1) <= t_i / t_ref < e_k, with
+    e_(-1) = 0 and e_(len(edges)) = infinity (``edges`` increasing). Pixels whose reference is not finite
+    and positive get zeros. The bands sum to the ray's opacity, 1 - T."""
+    edges = np.asarray(edges, np.float64)
+    o, d = _camera_rays(camera)
+    ref = np.asarray(reference, np.float64).reshape(-1)
+    valid = np.isfinite(ref) & (ref > 0)
+    plan = integrator.plan((layer,))
+    chain = getattr(plan.sources, layer)
+    bands = len(edges) + 1
+    out = np.zeros((len(o), bands))
+    with dr.suspend_grad():
+        for s in range(0, len(o), chunk):
+            n = min(chunk, len(o) - s)
+            total = dr.zeros(mi.Float, n * bands)
+            index = dr.arange(mi.UInt32, n)
+            origin = from_numpy(mi.Point3f, o[s:s + n])
+            scale = from_numpy(mi.Float, np.where(valid[s:s + n], 1.0 / np.where(valid[s:s + n], ref[s:s + n], 1.0),
+                                                  0.0))
+
+            def probe(p, w, active, _depth):
+                ratio = dr.norm(plan.space.to_world(p) - origin) * scale
+                band = dr.zeros(mi.UInt32, dr.width(ratio))
+                for e in edges:  # the number of edges at or below the ratio
+                    band += dr.select(ratio >= float(e), 1, 0)
+                dr.scatter_reduce(dr.ReduceOp.Add, total, w[chain], index * bands + band, active & (scale > 0))
+
+            rays = march.prepare_rays(plan, origin, from_numpy(mi.Vector3f, d[s:s + n]))
+            march.forward(plan, rays, dr.full(mi.Float, 0.5, n), probe=probe)
+            out[s:s + n] = np.array(total).reshape(n, bands)
+    return out.reshape(camera.height, camera.width, bands)
 
 
 def _camera_rays(camera):
