@@ -74,14 +74,15 @@ class FitConfig(Settings):
     # before sh_color was RGB; backgrounds before fringe_contrast kept the dark fringe; scenes before
     # scene_occupancy_voxels / scene_stop_transmittance / scene_strides were written with fitting's cells,
     # stop and steps; fits before strides marched every occupied cell at the fit's step; default plans before
-    # sample_ns did not count their last stage; fits before average_window kept the last iterate
+    # sample_ns did not count their last stage; fits before average_window kept the last iterate; fits before
+    # free_space left the masks' free space to the data
     ADDED = {"sh_color": "rgb", "host_ms": 0.0, "bg_lr_density": 0.1, "bg_lr_color": 0.05, "bg_tv_density": 1e-4,
              "bg_tv_color": 1e-5,
              "lr_views": 0.0, "lr_views_final": True, "lr_views_quantile": 1.0,
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
              "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0, "fringe_contrast": 0.0,
              "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4, "scene_strides": False,
-             "strides": "none", "sample_ns": None, "float_ns": 0.0, "average_window": 0.0}
+             "strides": "none", "sample_ns": None, "float_ns": 0.0, "average_window": 0.0, "free_space": False}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -241,6 +242,12 @@ class FitConfig(Settings):
     distortion_object: float = setting(5.0, "factor on the distortion loss of rays inside the object's masks: "
                                             "one peak per object ray (haze left in front of the object would stay "
                                             "in the background and go missing from the foreground)", low=0)
+    free_space: bool = setting(False, "the full phase keeps empty the space the object masks prove free: outside the "
+                                      "visual hull, inside a training view's mask, nearer to that camera than the "
+                                      "hull on the pixel (mi_voldis.fit.free_space); else a fit may draw the object "
+                                      "on a veil in front of it, which the background keeps as its ghost")
+    free_space_margin: float = setting(0.02, "with free_space, a point is free only nearer than (1 - this) times the "
+                                             "hull's distance on its pixel", low=0, above=None, high=0.5)
     near_grad: float = setting(0.0, "near-camera gradient scaling (Floaters No More) in the full field's fit: a "
                                     "sample's gradients are scaled by min(1, (d / r)^2), d its distance from "
                                     "the camera, r this fraction of the rig's extent (nerfstudio's unit: 1 is "

@@ -9,6 +9,7 @@ import numpy as np
 from .. import exposure
 from ..data.scene_box import rig_extent
 from ..device import from_numpy
+from ..field.bricks import EMPTY_DENSITY
 from ..field.state import MEAN_CHANNELS, neighbour_vertices
 from ..losses import background_loss, depth_smoothness_loss, distortion_loss, full_loss
 from ..optim.average import moving_average, stride, window_decay
@@ -17,6 +18,7 @@ from ..raybank import tile_pairs
 from ..regularizers import add_tv_gradient, sparsity_gradient, tv_gradient
 from ..render.rays import render_rays
 from .fields import fit_integrator, memory_bound, occupancy_resolution, occupancy_sigma, refine
+from .free_space import training_free_space
 from .observed import view_rate_scale
 from .schedule import REPLAN_EVERY, capped, plan_cost, rescale_after_cap, resolution_at
 
@@ -107,12 +109,39 @@ class FieldFit:
             self.params["exposure"] = self.state.exposure
             self.adam.lrs["exposure"] = self.inputs.cfg.exposure_lr
         self.keys = list(self.params)
+        self.free = self.free_space()
+        self.keep_free()
         self.view_zero = {r: view_lattice_zero(self.integrator.fields[r]) for r in self.roles}
         self.neighbours = {}  # per role, made when the TV first needs them
         if resume and self.state.occupancy is not None and self.state.occupancy_phase == self.phase:
             self.integrator.use_occupancy(self.state.occupancy, self.state.strides)
         elif self.state.occupancy_on:
             self.update_occupancy()
+
+    def free_space(self):
+        """Packed indices of the full field's density at the vertices the masks prove empty (``free_space``,
+        :mod:`mi_voldis.fit.free_space`), None where none is kept empty (another phase, no masks, the
+        setting off); the lattice is this phase's own, so a refinement finds them anew."""
+        if "full" not in self.roles:
+            return None
+        field = self.state.fields["full"]
+        free = training_free_space(self.inputs, field)
+        if free is None or not free.any():
+            return None
+        if self.inputs.progress:
+            print(f"free space: {int(free.sum())} of {int(field.vertices)} stored vertices kept empty (the masks' "
+                  "cones before the visual hull)", file=sys.stderr)
+        return from_numpy(mi.UInt32, (np.flatnonzero(free) * field.width).astype(np.uint32))
+
+    def keep_free(self):
+        """The free space's density back to empty (a projection after each step: Adam's update may have
+        grown it)."""
+        if self.free is None:
+            return
+        with dr.suspend_grad():
+            packed = self.integrator.fields["full"].packed
+            dr.scatter(packed, EMPTY_DENSITY, self.free)
+            dr.eval(packed)
 
     def refit_elements(self, field):
         """The packed elements of ``field`` a refit masked to ``hull`` may change (UInt32, ascending): density
@@ -206,6 +235,7 @@ class FieldFit:
     def after_step(self, step):
         if self.fit_exposure:  # shared corrections belong to the scene's colours (mi_voldis.exposure)
             self.params["exposure"] = exposure.centre(self.params["exposure"])
+        self.keep_free()
         # the state holds the values Adam just made, not the ones before them: a stale copy of every field
         # would stay alive until the next occupancy update (a grid's worth of memory at the step's peak)
         self.sync_states()

@@ -1,0 +1,92 @@
+"""The space the object masks prove empty, kept empty while the full field is fitted.
+
+A training pixel inside the object's mask shows the object: occluders in front of it are outside the mask
+(:mod:`mi_voldis.fit.hull`), so along that pixel's ray nothing stands between the camera and the object.
+The object lies in its visual hull H (the masks' cones intersected, grown by ``hull_dilation``); so a point
+p outside H whose pixel in view j lies inside mask j, nearer to camera j than H is on that pixel,
+
+    p not in H,  pi_j(p) in erode(M_j),  |p - c_j| < (1 - m) min { |q - c_j| : q in H, pi_j(q) ~ pi_j(p) },
+
+is empty space, m a margin (``free_space_margin``). Left free, a fit can draw the object on a veil in front
+of it that each training view sees at its own place (a painted screen; the photographs are reproduced,
+off-path views and the geometry are not), and the background keeps that veil: the removed object's
+glassy ghost. ``q ~ p``: the hull's vertices projected into the pixel or its neighbours within the footprint
+of a voxel; a pixel with none around is left alone, so what lies behind the object is never taken.
+"""
+import numpy as np
+
+from ..cameras import DevicePoints
+from ..data.types import spread
+from ..field.state import vertex_positions
+from ..metrics import diagonal_pixels, dilate
+from .hull import visual_hull
+
+VIEWS = 24  # masked training views spread over the set that mark the free space (each a pass over the vertices)
+
+
+def nearest_filter(image, radius):
+    """The minimum of ``image`` (H, W) over each pixel's (2 radius + 1)^2 neighbourhood (inf beyond the edge)."""
+    padded = np.pad(image, radius, constant_values=np.inf)
+    out = np.full(image.shape, np.inf)
+    for dy in range(2 * radius + 1):
+        for dx in range(2 * radius + 1):
+            out = np.minimum(out, padded[dy:dy + image.shape[0], dx:dx + image.shape[1]])
+    return out
+
+
+def free_vertices(field, space, cameras, masks, dilation_px, min_fraction, margin):
+    """Bool per stored vertex of ``field`` (NumPy): in the free space the masks prove (module docstring), by
+    ``cameras`` and their ``masks`` ((N, H, W) bool); the hull from the masks grown by ``dilation_px`` in
+    ``min_fraction`` of the views that see a point (:func:`~mi_voldis.fit.hull.visual_hull`)."""
+    pts, real = vertex_positions(field)
+    out = np.zeros(len(pts), bool)
+    pick = np.flatnonzero(real)
+    if not len(pick) or not len(cameras):
+        return out
+    world = space.to_world_np(pts[pick])
+    hull = visual_hull(world, cameras, masks, dilation_px, min_fraction)
+    if not hull.any():
+        return out
+    voxel = float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
+    at = DevicePoints(world)
+    free = np.zeros(len(world), bool)
+    for cam, mask in zip(cameras, masks):
+        index, ok = (np.array(a) for a in at.pixel_of(cam))
+        ok = ok.astype(bool)
+        dist = np.array(at.distance(cam))
+        on = ok & hull
+        if not on.any():
+            continue
+        near = np.full(mask.size, np.inf)
+        np.minimum.at(near, index[on], dist[on])
+        # a voxel of the hull spans this many pixels at the hull's distance (world units over a pixel's angle),
+        # plus one for the vertex's rounding: that far its nearest distance reaches
+        pixel = np.radians(cam.fov_x) / cam.width * float(np.median(dist[on]))
+        # space lattices (contracted, NDC) stretch voxels in world space: read their size where the hull is
+        radius = int(np.ceil(voxel_world(space, world[on], voxel) / pixel)) + 1
+        near = nearest_filter(near.reshape(mask.shape), radius).reshape(-1)
+        inner = ~dilate(~np.asarray(mask, bool), 1).reshape(-1)  # the mask eroded by a pixel: its edge mixes
+        ahead = near[index]
+        free |= ok & ~hull & inner[index] & np.isfinite(ahead) & (dist < (1.0 - margin) * ahead)
+    out[pick[free]] = True
+    return out
+
+
+def voxel_world(space, world, voxel):
+    """The world length of a scene-space voxel of edge ``voxel`` at the median of the points ``world``."""
+    centre = np.median(world, axis=0)
+    ends = space.from_world_np(np.stack([centre, centre]))
+    ends[1] = ends[1] + voxel / np.sqrt(3.0)
+    back = space.to_world_np(ends)
+    return float(max(np.linalg.norm(back[1] - back[0]), 1e-12))
+
+
+def training_free_space(inputs, field):
+    """:func:`free_vertices` of ``field`` from up to :data:`VIEWS` of the masked training views of ``inputs``
+    (None without masks or without ``free_space``)."""
+    cfg, ds = inputs.cfg, inputs.ds
+    if not cfg.free_space or ds.masks is None or not len(ds.masked_train):
+        return None
+    views = [ds.masked_train[k] for k in spread(len(ds.masked_train), VIEWS)]
+    return free_vertices(field, inputs.space, [ds.cameras[v] for v in views], ds.masks[views],
+                         diagonal_pixels(cfg.hull_dilation, ds.size), cfg.hull_min_views, cfg.free_space_margin)
