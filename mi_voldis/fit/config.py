@@ -247,7 +247,7 @@ class FitConfig(Settings):
                                       "hull on the pixel (mi_voldis.fit.free_space); else a fit may draw the object "
                                       "on a veil in front of it, which the background keeps as its ghost")
     free_space_margin: float = setting(0.02, "with free_space, a point is free only nearer than (1 - this) times the "
-                                             "hull's distance on its pixel", low=0, above=None, high=0.5)
+                                             "hull's distance on its pixel", low=0, high=0.5)
     near_grad: float = setting(0.0, "near-camera gradient scaling (Floaters No More) in the full field's fit: a "
                                     "sample's gradients are scaled by min(1, (d / r)^2), d its distance from "
                                     "the camera, r this fraction of the rig's extent (nerfstudio's unit: 1 is "
