@@ -14,6 +14,7 @@ from mi_voldis.space import SceneSpace
 from mi_voldis.synth.rigs import look_at
 
 RADIUS = 0.3  # the object: a sphere at the origin
+LATTICE = 61  # vertices every 0.05: a voxel spans about 3.5 pixels halfway from a camera to the sphere
 # an arc on one side (-z), 100 degrees wide: the masks' cones meet about the sphere alone (a narrow rig's would
 # run together towards the cameras, the whole tube in the hull)
 CAMERAS = [[3.0 * np.sin(np.radians(a)), 0.0, -3.0 * np.cos(np.radians(a))] for a in (-50.0, -20.0, 20.0, 50.0)]
@@ -27,14 +28,38 @@ def sphere_hit(o, d):
     return np.where((disc > 0) & (t > 0), t, np.inf)
 
 
-def sphere_rig():
-    cams = [Camera(look_at(p, [0.0, 0.0, 0.0]), 70.0, 64, 48) for p in CAMERAS]  # wide: each frames the others' rays
+# a vertical pole (radius, axis through (x, z)) between camera 0 and the sphere, across the left of its image
+POLE_RADIUS = 0.03
+POLE = 0.5 * np.array(CAMERAS[0])[[0, 2]] + 0.1 * np.array([np.cos(np.radians(50.0)), np.sin(np.radians(50.0))])
+
+
+def pole_hit(o, d):
+    """First distance along unit rays (o, d) to the infinite vertical pole, inf where they miss."""
+    oo, dd = o[:, [0, 2]] - POLE, d[:, [0, 2]]
+    a = np.maximum(np.sum(dd * dd, axis=1), 1e-12)
+    b = np.sum(oo * dd, axis=1)
+    disc = b * b - a * (np.sum(oo * oo, axis=1) - POLE_RADIUS ** 2)
+    t = (-b - np.sqrt(np.maximum(disc, 0.0))) / a
+    return np.where((disc > 0) & (t > 0), t, np.inf)
+
+
+def sphere_rig(pole=False):
+    """The four cameras (128 x 96, wide: each frames the others' rays) and their masks of the sphere's visible
+    pixels (with ``pole``: the pole hides part of it)."""
+    cams = [Camera(look_at(p, [0.0, 0.0, 0.0]), 70.0, 128, 96) for p in CAMERAS]
     masks = []
     for cam in cams:
         py, px = np.mgrid[0:cam.height, 0:cam.width]
         o, d = pixel_rays(cam, px.ravel() + 0.5, py.ravel() + 0.5)
-        masks.append(np.isfinite(sphere_hit(o, d)).reshape(cam.height, cam.width))
+        t = sphere_hit(o, d)
+        seen = np.isfinite(t) & ~(pole_hit(o, d) < t) if pole else np.isfinite(t)
+        masks.append(seen.reshape(cam.height, cam.width))
     return cams, np.stack(masks)
+
+
+def lattice():
+    return new_field(-1.5 * np.ones(3), 1.5 * np.ones(3), LATTICE, 0, -20.0, 1.0)
+
 
 
 def test_the_free_space_lies_between_a_camera_and_the_object_and_never_in_the_hull_behind_it_or_beside_it():
@@ -43,7 +68,7 @@ def test_the_free_space_lies_between_a_camera_and_the_object_and_never_in_the_hu
     on that camera's axis (inside its mask, behind the object) and one above the sphere outside every
     mask are not."""
     cams, masks = sphere_rig()
-    field = new_field(-1.5 * np.ones(3), 1.5 * np.ones(3), 31, 0, -20.0, 1.0)  # vertices every 0.1
+    field = lattice()
     space = SceneSpace("world")
     free = free_vertices(field, space, cams, masks, 0, 0.9, 0.02)
     pts, real = vertex_positions(field)
@@ -66,6 +91,24 @@ def test_the_free_space_lies_between_a_camera_and_the_object_and_never_in_the_hu
     assert not free[vertex(0.0, 1.2, 0.0)]
 
 
+def test_a_thin_occluder_in_front_of_the_object_keeps_every_vertex_that_reaches_it():
+    """A pole a voxel wide between camera 0 and the sphere: its gap in mask 0 is a few pixels wide, so the
+    vertices about it project inside the mask though their cells draw the pole. None of the vertices whose
+    eight cells reach the pole is free; the free space beside it stays."""
+    cams, masks = sphere_rig(pole=True)
+    field = lattice()
+    free = free_vertices(field, SceneSpace("world"), cams, masks, 0, 0.9, 0.02)
+    pts, real = vertex_positions(field)
+    voxel = 3.0 / (LATTICE - 1)
+    # a vertex's cells: the cube of half-side one voxel about it; it reaches the pole where the square's
+    # nearest point to the axis lies within the radius
+    nearest = np.clip(POLE, pts[:, [0, 2]] - voxel, pts[:, [0, 2]] + voxel)
+    reaches = real & (np.linalg.norm(nearest - POLE, axis=1) <= POLE_RADIUS)
+    assert reaches.sum() > 100
+    assert not (free & reaches).any(), pts[free & reaches][:5]
+    assert free.sum() > 20
+
+
 def test_a_pixel_takes_the_nearest_distance_of_its_neighbours_within_the_radius():
     image = np.full((5, 7), np.inf)
     image[2, 3], image[0, 0] = 2.0, 5.0
@@ -77,7 +120,7 @@ def test_a_pixel_takes_the_nearest_distance_of_its_neighbours_within_the_radius(
 @pytest.mark.parametrize("margin", [0.02, 0.2])
 def test_a_wider_margin_frees_no_more(margin):
     cams, masks = sphere_rig()
-    field = new_field(-1.5 * np.ones(3), 1.5 * np.ones(3), 31, 0, -20.0, 1.0)
+    field = lattice()
     space = SceneSpace("world")
     base = free_vertices(field, space, cams, masks, 0, 0.9, 0.0)
     wider = free_vertices(field, space, cams, masks, 0, 0.9, margin)

@@ -12,13 +12,20 @@ of it that each training view sees at its own place (a painted screen; the photo
 off-path views and the geometry are not), and the background keeps that veil: the removed object's
 glassy ghost. ``q ~ p``: the hull's vertices projected into the pixel or its neighbours within the footprint
 of a voxel; a pixel with none around is left alone, so what lies behind the object is never taken.
+
+A vertex's density reaches every point of the eight cells around it (trilinear interpolation), a cube of
+half-side one voxel v whose image is a disc of radius up to sqrt(3) v / (|p - c_j| a) pixels (a: a pixel's
+angle). Only when that whole disc lies inside the mask do all the rays it touches show the object, so p must
+lie deeper inside erode(M_j) than that: a thin occluder in front of the object (a pole, whose gap in the mask
+is a few pixels wide) keeps the vertices that draw its edges.
 """
+import cv2
 import numpy as np
 
 from ..cameras import DevicePoints
 from ..data.types import spread
 from ..field.state import vertex_positions
-from ..metrics import diagonal_pixels, dilate
+from ..metrics import diagonal_pixels
 from .hull import visual_hull
 
 VIEWS = 24  # masked training views spread over the set that mark the free space (each a pass over the vertices)
@@ -59,17 +66,27 @@ def free_vertices(field, space, cameras, masks, dilation_px, min_fraction, margi
             continue
         near = np.full(mask.size, np.inf)
         np.minimum.at(near, index[on], dist[on])
-        # a voxel of the hull spans this many pixels at the hull's distance (world units over a pixel's angle),
-        # plus one for the vertex's rounding: that far its nearest distance reaches
-        pixel = np.radians(cam.fov_x) / cam.width * float(np.median(dist[on]))
+        angle = np.radians(cam.fov_x) / cam.width  # a pixel's angle
         # space lattices (contracted, NDC) stretch voxels in world space: read their size where the hull is
-        radius = int(np.ceil(voxel_world(space, world[on], voxel) / pixel)) + 1
+        edge = voxel_world(space, world[on], voxel)
+        # a voxel of the hull spans this many pixels at the hull's distance, plus one for the vertex's
+        # rounding: that far its nearest distance reaches
+        radius = int(np.ceil(edge / (angle * float(np.median(dist[on]))))) + 1
         near = nearest_filter(near.reshape(mask.shape), radius).reshape(-1)
-        inner = ~dilate(~np.asarray(mask, bool), 1).reshape(-1)  # the mask eroded by a pixel: its edge mixes
         ahead = near[index]
-        free |= ok & ~hull & inner[index] & np.isfinite(ahead) & (dist < (1.0 - margin) * ahead)
+        # the vertex's reach in pixels (module docstring), plus one: its pixel's edge mixes the two sides
+        reach = np.sqrt(3.0) * edge / (angle * np.maximum(dist, 1e-12)) + 1.0
+        free |= (ok & ~hull & (inside_depth(mask).reshape(-1)[index] > reach) & np.isfinite(ahead)
+                 & (dist < (1.0 - margin) * ahead))
     out[pick[free]] = True
     return out
+
+
+def inside_depth(mask):
+    """Each pixel's distance (pixels) to the nearest pixel outside ``mask`` (H, W) or outside the image; 0
+    outside the mask."""
+    padded = np.pad(np.asarray(mask, np.uint8), 1)  # beyond the image nothing is known to be the object
+    return cv2.distanceTransform(padded, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)[1:-1, 1:-1]
 
 
 def voxel_world(space, world, voxel):
