@@ -15,9 +15,11 @@ of a voxel; a pixel with none around is left alone, so what lies behind the obje
 
 A vertex's density reaches every point of the eight cells around it (trilinear interpolation), a cube of
 half-side one voxel v whose image is a disc of radius up to sqrt(3) v / (|p - c_j| a) pixels (a: a pixel's
-angle). Only when that whole disc lies inside the mask do all the rays it touches show the object, so p must
-lie deeper inside erode(M_j) than that: a thin occluder in front of the object (a pole, whose gap in the mask
-is a few pixels wide) keeps the vertices that draw its edges.
+angle). Where an occluder stands in front of the object its gap in the mask is narrow (a pole: a few pixels):
+the vertices about the occluder project inside the mask though their cells draw its edges. So p must lie
+farther than that radius from every gap, the pixels a closing of M_j adds (gaps up to a few voxels wide at
+the hull's distance): the occluder keeps its edges. At the mask's outer edge the rays beside it pass the
+same empty space, so there the eroded mask alone decides.
 """
 import cv2
 import numpy as np
@@ -29,6 +31,7 @@ from ..metrics import diagonal_pixels
 from .hull import visual_hull
 
 VIEWS = 24  # masked training views spread over the set that mark the free space (each a pass over the vertices)
+GAP_VOXELS = 2  # gaps in a mask narrower than about 4 voxels' image at the hull's distance are occluders' (a pole)
 
 
 def nearest_filter(image, radius):
@@ -76,8 +79,9 @@ def free_vertices(field, space, cameras, masks, dilation_px, min_fraction, margi
         ahead = near[index]
         # the vertex's reach in pixels (module docstring), plus one: its pixel's edge mixes the two sides
         reach = np.sqrt(3.0) * edge / (angle * np.maximum(dist, 1e-12)) + 1.0
-        free |= (ok & ~hull & (inside_depth(mask).reshape(-1)[index] > reach) & np.isfinite(ahead)
-                 & (dist < (1.0 - margin) * ahead))
+        clear = gap_distance(mask, GAP_VOXELS * radius).reshape(-1)[index] > reach
+        inner = inside_depth(mask).reshape(-1)[index] > 1.5  # the mask eroded by a pixel: its edge mixes
+        free |= ok & ~hull & inner & clear & np.isfinite(ahead) & (dist < (1.0 - margin) * ahead)
     out[pick[free]] = True
     return out
 
@@ -87,6 +91,18 @@ def inside_depth(mask):
     outside the mask."""
     padded = np.pad(np.asarray(mask, np.uint8), 1)  # beyond the image nothing is known to be the object
     return cv2.distanceTransform(padded, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)[1:-1, 1:-1]
+
+
+def gap_distance(mask, width):
+    """Each pixel's distance (pixels) to the nearest gap of ``mask`` (H, W): a pixel outside it that a
+    closing by a (2 ``width`` + 1)^2 square fills, a strip up to about 2 ``width`` pixels across with the mask
+    on both sides (inf where there is none)."""
+    m = np.pad(np.asarray(mask, np.uint8), width + 1)  # beyond the image: not the mask, so no gap at its edge
+    closed = cv2.morphologyEx(m, cv2.MORPH_CLOSE, np.ones((2 * width + 1, 2 * width + 1), np.uint8))
+    gap = ((closed > 0) & (m == 0))[width + 1:-width - 1, width + 1:-width - 1]
+    if not gap.any():
+        return np.full(m.shape, np.inf)
+    return cv2.distanceTransform((~gap).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
 
 
 def voxel_world(space, world, voxel):
