@@ -8,7 +8,7 @@ import pytest
 import mi_voldis  # noqa: F401
 from mi_voldis.cameras import Camera, pixel_rays
 from mi_voldis.field.state import new_field, vertex_positions
-from mi_voldis.fit.free_space import free_vertices, nearest_filter
+from mi_voldis.fit.free_space import free_vertices, gap_distance, nearest_filter
 from mi_voldis.fit.hull import visual_hull
 from mi_voldis.space import SceneSpace
 from mi_voldis.synth.rigs import look_at
@@ -107,6 +107,21 @@ def test_a_thin_occluder_in_front_of_the_object_keeps_every_vertex_that_reaches_
     assert reaches.sum() > 100
     assert not (free & reaches).any(), pts[free & reaches][:5]
     assert free.sum() > 20
+
+
+def test_a_gap_is_a_narrow_strip_with_the_mask_on_both_sides_and_never_the_mask_s_outer_edge():
+    """A rectangle cut by a strip 2 pixels wide (touching the image's edge on the left): the distances run
+    from the strip; the rectangle alone, or cut by a strip wider than the closing, has no gap."""
+    mask = np.zeros((12, 20), bool)
+    mask[2:10, 0:18] = True
+    cut = mask.copy()
+    cut[:, 9:11] = False
+    row = gap_distance(cut, 2)[5]
+    assert row[9] == row[10] == 0 and row[8] == row[11] == 1 and row[0] == 9 and row[19] == 9
+    assert np.isinf(gap_distance(mask, 2)).all()
+    wide = mask.copy()
+    wide[:, 6:14] = False
+    assert np.isinf(gap_distance(wide, 2)).all()
 
 
 def test_a_pixel_takes_the_nearest_distance_of_its_neighbours_within_the_radius():
