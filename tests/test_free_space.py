@@ -118,7 +118,8 @@ def test_a_gap_is_a_narrow_strip_with_the_mask_on_both_sides_and_never_the_mask_
     cut[:, 9:11] = False
     row = gap_distance(cut, 2)[5]
     assert row[9] == row[10] == 0 and row[8] == row[11] == 1 and row[0] == 9 and row[19] == 9
-    assert np.isinf(gap_distance(mask, 2)).all()
+    alone = gap_distance(mask, 2)
+    assert alone.shape == mask.shape and np.isinf(alone).all()
     wide = mask.copy()
     wide[:, 6:14] = False
     assert np.isinf(gap_distance(wide, 2)).all()

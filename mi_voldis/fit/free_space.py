@@ -101,7 +101,7 @@ def gap_distance(mask, width):
     closed = cv2.morphologyEx(m, cv2.MORPH_CLOSE, np.ones((2 * width + 1, 2 * width + 1), np.uint8))
     gap = ((closed > 0) & (m == 0))[width + 1:-width - 1, width + 1:-width - 1]
     if not gap.any():
-        return np.full(m.shape, np.inf)
+        return np.full(gap.shape, np.inf)
     return cv2.distanceTransform((~gap).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
 
 
