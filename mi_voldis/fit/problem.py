@@ -111,6 +111,9 @@ class FieldFit:
         self.keys = list(self.params)
         self.free = self.free_space()
         self.keep_free()
+        self.adam.holds.pop("full.packed", None)
+        if self.free is not None:  # Adam writes it back after each step: its update may have grown it
+            self.adam.holds["full.packed"] = (self.free, EMPTY_DENSITY)
         self.view_zero = {r: view_lattice_zero(self.integrator.fields[r]) for r in self.roles}
         self.neighbours = {}  # per role, made when the TV first needs them
         if resume and self.state.occupancy is not None and self.state.occupancy_phase == self.phase:
@@ -134,8 +137,7 @@ class FieldFit:
         return from_numpy(mi.UInt32, (np.flatnonzero(free) * field.width).astype(np.uint32))
 
     def keep_free(self):
-        """The free space's density back to empty (a projection after each step: Adam's update may have
-        grown it)."""
+        """The free space's density set empty (at the start of a stage; Adam's ``holds`` keep it so)."""
         if self.free is None:
             return
         with dr.suspend_grad():
@@ -235,7 +237,6 @@ class FieldFit:
     def after_step(self, step):
         if self.fit_exposure:  # shared corrections belong to the scene's colours (mi_voldis.exposure)
             self.params["exposure"] = exposure.centre(self.params["exposure"])
-        self.keep_free()
         # the state holds the values Adam just made, not the ones before them: a stale copy of every field
         # would stay alive until the next occupancy update (a grid's worth of memory at the step's peak)
         self.sync_states()

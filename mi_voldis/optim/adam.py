@@ -15,6 +15,10 @@ Adam's step is invariant to the scale of a gradient, so scaling the gradient wou
 region): the moments are kept for them alone and ``grads[key]`` holds the gradient at them, in their order.
 Elements whose gradient is always zero never move under Adam (their moments stay zero), so this steps
 exactly as the whole array with the gradient masked to the subset would, on memory and time of its size.
+``holds[key]``, where set: (UInt32 indices, value): those elements are written with the value after every
+step (a projection onto a constraint, e.g. space kept empty). Written into the step's own new array, so
+the hold costs its indices alone; the same write made after the step, on an array the parameters and the
+fields both reference, would copy the whole array first.
 """
 import drjit as dr
 import mitsuba as mi
@@ -31,6 +35,7 @@ class Adam:
         self.scales = {}  # key -> Float: per-element factors on the step (they follow the lattice, not the moments)
         self.growth = {}  # key -> Float: per-element factors on the steps that increase an element
         self.subsets = {}  # key -> UInt32: the elements stepped, the gradient given at them alone
+        self.holds = {}  # key -> (UInt32, float): elements set to the value after each step
 
     def reset(self, key=None):
         """Forget the moments (of one parameter, or all): e.g. after a grid is resampled."""
@@ -82,6 +87,10 @@ class Adam:
                 dr.eval(stepped, self.m[key], self.v[key])
                 flat = mi.Float(flat)
                 dr.scatter(flat, stepped, subset)
+            if key in self.holds:
+                held, value = self.holds[key]
+                dr.eval(flat, self.m[key], self.v[key])  # a new array that nothing else references: written in place
+                dr.scatter(flat, value, held)
             params[key] = mi.TensorXf(flat, x.shape) if isinstance(x, mi.TensorXf) else flat
             dr.schedule(params[key], self.m[key], self.v[key])
 
