@@ -131,6 +131,12 @@ def test_a_pixel_takes_the_nearest_distance_of_its_neighbours_within_the_radius(
     out = nearest_filter(image, 1)
     assert out[1, 2] == 2.0 and out[3, 4] == 2.0 and out[1, 1] == 5.0
     assert out[1, 0] == 5.0 and np.isinf(out[4, 0]) and np.isinf(out[2, 5])
+    rng = np.random.default_rng(4)  # against the minimum taken pixel by pixel, on doubles a float would round
+    image = np.where(rng.random((9, 11)) < 0.7, np.inf, 1.0 + rng.random((9, 11)) * 1e-9)
+    for radius in (1, 3):
+        want = [[image[max(y - radius, 0):y + radius + 1, max(x - radius, 0):x + radius + 1].min() for x in range(11)]
+                for y in range(9)]
+        np.testing.assert_array_equal(nearest_filter(image, radius), want)
 
 
 @pytest.mark.parametrize("margin", [0.02, 0.2])

@@ -22,9 +22,11 @@ the hull's distance): the occluder keeps its edges. At the mask's outer edge the
 same empty space, so there the eroded mask alone decides.
 """
 import cv2
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 
-from ..cameras import DevicePoints
+from ..cameras import DevicePoints, device_image
 from ..data.types import spread
 from ..field.state import vertex_positions
 from ..metrics import diagonal_pixels
@@ -36,18 +38,16 @@ GAP_VOXELS = 2  # gaps in a mask narrower than about 4 voxels' image at the hull
 
 def nearest_filter(image, radius):
     """The minimum of ``image`` (H, W) over each pixel's (2 radius + 1)^2 neighbourhood (inf beyond the edge)."""
-    padded = np.pad(image, radius, constant_values=np.inf)
-    out = np.full(image.shape, np.inf)
-    for dy in range(2 * radius + 1):
-        for dx in range(2 * radius + 1):
-            out = np.minimum(out, padded[dy:dy + image.shape[0], dx:dx + image.shape[1]])
-    return out
+    square = np.ones((2 * radius + 1, 2 * radius + 1), np.uint8)
+    return cv2.erode(np.asarray(image, np.float64), square, borderType=cv2.BORDER_CONSTANT, borderValue=np.inf)
 
 
 def free_vertices(field, space, cameras, masks, dilation_px, min_fraction, margin):
     """Bool per stored vertex of ``field`` (NumPy): in the free space the masks prove (module docstring), by
     ``cameras`` and their ``masks`` ((N, H, W) bool); the hull from the masks grown by ``dilation_px`` in
-    ``min_fraction`` of the views that see a point (:func:`~mi_voldis.fit.hull.visual_hull`)."""
+    ``min_fraction`` of the views that see a point (:func:`~mi_voldis.fit.hull.visual_hull`). Each view's
+    rule is made an image (how near a vertex must be, how far the gaps are) and asked of every vertex in one
+    kernel (:class:`~mi_voldis.cameras.DevicePoints`); only the hull's vertices come back to the host."""
     pts, real = vertex_positions(field)
     out = np.zeros(len(pts), bool)
     pick = np.flatnonzero(real)
@@ -58,31 +58,37 @@ def free_vertices(field, space, cameras, masks, dilation_px, min_fraction, margi
     if not hull.any():
         return out
     voxel = float(np.max(np.diag(field.to_world)[:3] / (np.array(field.shape) - 1)))
-    at = DevicePoints(world)
-    free = np.zeros(len(world), bool)
+    at, shell = DevicePoints(world), DevicePoints(world[hull])
+    free = dr.zeros(mi.Bool, at.count)
     for cam, mask in zip(cameras, masks):
-        index, ok = (np.array(a) for a in at.pixel_of(cam))
+        index, ok = (np.array(a) for a in shell.pixel_of(cam))
         ok = ok.astype(bool)
-        dist = np.array(at.distance(cam))
-        on = ok & hull
-        if not on.any():
+        if not ok.any():
             continue
+        dist = np.array(shell.distance(cam))[ok]
         near = np.full(mask.size, np.inf)
-        np.minimum.at(near, index[on], dist[on])
+        np.minimum.at(near, index[ok], dist)
         angle = np.radians(cam.fov_x) / cam.width  # a pixel's angle
         # space lattices (contracted, NDC) stretch voxels in world space: read their size where the hull is
-        edge = voxel_world(space, world[on], voxel)
+        edge = voxel_world(space, world[hull][ok], voxel)
         # a voxel of the hull spans this many pixels at the hull's distance, plus one for the vertex's
         # rounding: that far its nearest distance reaches
-        radius = int(np.ceil(edge / (angle * float(np.median(dist[on]))))) + 1
-        near = nearest_filter(near.reshape(mask.shape), radius).reshape(-1)
-        ahead = near[index]
-        # the vertex's reach in pixels (module docstring), plus one: its pixel's edge mixes the two sides
-        reach = np.sqrt(3.0) * edge / (angle * np.maximum(dist, 1e-12)) + 1.0
-        clear = gap_distance(mask, GAP_VOXELS * radius).reshape(-1)[index] > reach
-        inner = inside_depth(mask).reshape(-1)[index] > 1.5  # the mask eroded by a pixel: its edge mixes
-        free |= ok & ~hull & inner & clear & np.isfinite(ahead) & (dist < (1.0 - margin) * ahead)
-    out[pick[free]] = True
+        radius = int(np.ceil(edge / (angle * float(np.median(dist))))) + 1
+        ahead = nearest_filter(near.reshape(mask.shape), radius)
+        inner = inside_depth(mask) > 1.5  # the mask eroded by a pixel: its edge mixes
+        # free nearer than this: 0 (none) off the eroded mask and where no hull lies ahead
+        limit = np.where(inner & np.isfinite(ahead), (1.0 - margin) * ahead, 0.0)
+        gaps = gap_distance(mask, GAP_VOXELS * radius)
+        index, ok = at.pixel_of(cam)
+        d = at.distance(cam)
+        ahead_ok = d < dr.gather(mi.Float64, device_image(limit, mi.Float64), index, ok)
+        # the vertex's reach in pixels (module docstring), plus one: its pixel's edge mixes the two sides (the
+        # view's numbers opaque: one kernel serves every view)
+        reach = dr.opaque(mi.Float64, np.sqrt(3.0) * edge / angle) / dr.maximum(d, 1e-12) + 1.0
+        clear = dr.gather(mi.Float64, device_image(gaps, mi.Float64), index, ok) > reach
+        free |= ok & ahead_ok & clear
+        dr.eval(free)
+    out[pick[free.numpy().astype(bool) & ~hull]] = True
     return out
 
 
