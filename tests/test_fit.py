@@ -191,8 +191,9 @@ def test_train_script_errors_name_the_dataset(tmp_path):
 
 # with learning rates per brick (lr_views): a resumed fit counts the bricks' views anew, to the same scales
 RESUME_SETS = TINY_FIT + ["sh_degree=0", "checkpoint_every=5", "steps_full=80", "lr_views=1"]
-# in contracted space the fit strides through thin cells: a resumed fit takes back the levels it was stepping with
-RESUME_SPACES = {"world": [], "contract": ["space=contract"]}
+# in contracted space the fit strides through thin cells: a resumed fit takes back the levels it was stepping with;
+# with free_space a resumed stage keeps the free vertices its start chose from the field then
+RESUME_SPACES = {"world": [], "contract": ["space=contract"], "free_space": ["free_space=true"]}
 
 
 @pytest.fixture(scope="module")
@@ -222,7 +223,8 @@ def grids(run):
     return out
 
 
-@pytest.mark.parametrize("space,phase,step", [("world", "full", 35), ("world", "bg", 5), ("contract", "full", 35)])
+@pytest.mark.parametrize("space,phase,step", [("world", "full", 35), ("world", "bg", 5), ("contract", "full", 35),
+                                              ("free_space", "full", 35)])
 def test_resume_after_kill_equals_never_stopping(tiny_dataset, uninterrupted, tmp_path, space, phase, step):
     """kill -9 a fit after a checkpoint (in the full phase past the start of empty-space skipping, or in
     the background phase; in contracted space, with the stride levels of that skipping), resume it: the
@@ -240,6 +242,7 @@ def test_resume_after_kill_equals_never_stopping(tiny_dataset, uninterrupted, tm
     assert (out / "keep.txt").exists() and not (out / "metrics.json").exists()  # old run intact
     with np.load(checkpoint) as f:  # the checkpoint resumed from holds stride levels exactly where it strides
         assert ("strides/0/cells" in f.files) == (space == "contract")
+        assert ("free" in f.files) == (space == "free_space")
     run = subprocess.run(train_args(tiny_dataset, out, sets) + ["--resume"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert not (out / "keep.txt").exists() and (out / "metrics.json").exists()  # swapped in when complete

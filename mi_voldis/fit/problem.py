@@ -109,7 +109,7 @@ class FieldFit:
             self.params["exposure"] = self.state.exposure
             self.adam.lrs["exposure"] = self.inputs.cfg.exposure_lr
         self.keys = list(self.params)
-        self.free = self.free_space()
+        self.free = self.free_space(resume)
         self.keep_free()
         self.adam.holds.pop("full.packed", None)
         if self.free is not None:  # Adam writes it back after each step: its update may have grown it
@@ -121,20 +121,25 @@ class FieldFit:
         elif self.state.occupancy_on:
             self.update_occupancy()
 
-    def free_space(self):
+    def free_space(self, resume=False):
         """Packed indices of the full field's density at the vertices the masks prove empty (``free_space``,
         :mod:`mi_voldis.fit.free_space`), None where none is kept empty (another phase, no masks, the
-        setting off); the lattice is this phase's own, so a refinement finds them anew."""
+        setting off). Made anew on each lattice, once the field is fitted (a checkpoint taken) with its
+        surfaces telling an occluder's gaps in a mask from notches; ``resume``: the state's, as the stage
+        made them."""
         if "full" not in self.roles:
             return None
         field = self.state.fields["full"]
-        free = training_free_space(self.inputs, field)
-        if free is None or not free.any():
+        if not (resume and self.state.free is not None):
+            fitted = self.integrator if self.state.step > 0 else None
+            free = training_free_space(self.inputs, field, fitted)
+            self.state.free = None if free is None else np.flatnonzero(free).astype(np.uint32)
+            if self.inputs.progress and free is not None:
+                print(f"free space: {len(self.state.free)} of {int(field.vertices)} stored vertices kept empty (the "
+                      "masks' cones before the visual hull)", file=sys.stderr)
+        if self.state.free is None or not len(self.state.free):
             return None
-        if self.inputs.progress:
-            print(f"free space: {int(free.sum())} of {int(field.vertices)} stored vertices kept empty (the masks' "
-                  "cones before the visual hull)", file=sys.stderr)
-        return from_numpy(mi.UInt32, (np.flatnonzero(free) * field.width).astype(np.uint32))
+        return from_numpy(mi.UInt32, self.state.free * np.uint32(field.width))
 
     def keep_free(self):
         """The free space's density set empty (at the start of a stage; Adam's ``holds`` keep it so)."""

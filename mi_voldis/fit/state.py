@@ -45,6 +45,8 @@ class FitState:
     strides: tuple = ()  # ((Occupancy, step), ...): the integrator's stride levels built with it (strides)
     prior: dict | None = None  # what the lifted background prior did (mi_voldis.fit.lift.lift_prior)
     prior_keys: np.ndarray | None = None  # lattice keys of the background vertices it changed
+    free: np.ndarray | None = None  # the full field's vertices its stage keeps empty (free_space), as made at
+    # the stage's start: a resumed stage keeps the same ones
     averages: dict = field(default_factory=dict)  # role -> the moving average of its packed values over the
     # full phase's last stage (mi_voldis.optim.average), until it replaces the field at the phase's end
 
@@ -76,6 +78,8 @@ class FitState:
             arrays["hull_points"] = self.hull_points
         if self.prior_keys is not None:
             arrays["prior_keys"] = self.prior_keys
+        if self.free is not None:
+            arrays["free"] = self.free
         if self.exposure is not None:
             arrays["exposure"] = np.array(self.exposure)
         if self.occupancy is not None:
@@ -112,7 +116,7 @@ class FitState:
             strides.append((occupancy_from(arrays, f"strides/{k}"), float(arrays[f"strides/{k}/step"])))
             k += 1
         return cls(np.array(meta["lo"]), np.array(meta["hi"]), adam, fields, hull_points=arrays.get("hull_points"),
-                   prior_keys=arrays.get("prior_keys"), exposure=exposure, occupancy=occupancy,
+                   prior_keys=arrays.get("prior_keys"), free=arrays.get("free"), exposure=exposure, occupancy=occupancy,
                    strides=tuple(strides), averages=averages, **{key: meta.get(key) for key in cls.META})
 
 

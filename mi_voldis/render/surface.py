@@ -21,9 +21,10 @@ from . import march
 CHUNK = 1 << 16  # rays per launch
 
 
-def median_points(integrator, o, d, chunk=CHUNK, layer="full"):
+def median_points(integrator, o, d, chunk=CHUNK, layer="full", level=0.5):
     """The median point of ``layer``'s field ('full' or 'bg') on each world ray (``o``, ``d`` (n, 3)):
-    where its transmittance falls below a half, world space (n, 3), and whether it does (n,) bool."""
+    where its transmittance falls below a half (or ``level``), world space (n, 3), and whether it does (n,)
+    bool."""
     plan = integrator.plan((layer,))
     chain = getattr(plan.sources, layer)
     points, hit = np.zeros((len(o), 3)), np.zeros(len(o), bool)
@@ -35,7 +36,7 @@ def median_points(integrator, o, d, chunk=CHUNK, layer="full"):
 
             def probe(p, w, active, depth):
                 before = dr.exp(-depth[chain])
-                cross = active & (before >= 0.5) & (before - w[chain] < 0.5)
+                cross = active & (before >= level) & (before - w[chain] < level)
                 q = plan.space.to_world(p)
                 for k, value in enumerate((q.x, q.y, q.z, mi.Float(1.0))):
                     dr.scatter(found, value, index * 4 + k, cross)

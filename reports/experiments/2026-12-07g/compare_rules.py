@@ -42,7 +42,7 @@ print(f"free vertices: 5bbba03 {int(a.sum())}, today {int(b.sum())}, both {int((
 tiles = []
 for v in (1, 11, 20):
     mask = ds.masks[v]
-    gap = today.gap_distance(mask, 6) == 0
+    gap = today.mask_gaps(mask, 6)
     vis = np.zeros(mask.shape + (3,), np.uint8)
     vis[mask], vis[gap] = 255, (255, 0, 0)
     tiles += [Image.open(os.path.join(data, "images", f"view_{v:03d}.png")).convert("RGB"), Image.fromarray(vis)]
