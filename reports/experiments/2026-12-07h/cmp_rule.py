@@ -12,6 +12,8 @@ import time
 import numpy as np
 
 root, run, out = sys.argv[1:4]
+if os.path.exists(out):
+    raise SystemExit(f"error: {out} exists")
 sys.path.insert(0, root)  # the checkout's package, not the installed one
 load_dataset = importlib.import_module("mi_voldis.data").load_dataset
 spread = importlib.import_module("mi_voldis.data.types").spread

@@ -1,14 +1,12 @@
 """#46 probe: which of a mask's gaps a fitted full field calls an occluder's (its ray gathers an opacity of 1/4
 before the hull: red) and which a notch (green), in views 1, 11 and 20 of a run (its final field), beside
-the photographs; and the free vertices on its final lattice under 5bbba03's rule (the mask eroded by a
-pixel), the masks' gaps alone, and the gaps the field tells.
+the photographs; and the free vertices on its final lattice with the masks' gaps alone and with the gaps the
+field tells (5bbba03's rule on the same run: ../2026-12-07g/compare_rules.py).
 
     python gap_kinds.py RUN DATA SHEET.png
 """
 import os
-import subprocess
 import sys
-import types
 
 import numpy as np
 from PIL import Image
@@ -29,23 +27,15 @@ from mi_voldis.metrics import diagonal_pixels
 run, data, sheet = sys.argv[1], sys.argv[2], sys.argv[3]
 if os.path.exists(sheet):
     raise SystemExit(f"error: {sheet} exists")
-root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..")
-code = subprocess.run(["git", "-C", root, "show", "5bbba03:mi_voldis/fit/free_space.py"], check=True,
-                      capture_output=True, text=True).stdout
-before = types.ModuleType("mi_voldis.fit.free_space_5bbba03")
-before.__package__ = "mi_voldis.fit"
-exec(compile(code, "free_space@5bbba03", "exec"), before.__dict__)
 cfg, ds, state, inputs = load_run(run, data)
 full = state.fields["full"]
 views = [ds.masked_train[k] for k in spread(len(ds.masked_train), today.VIEWS)]
 dilation = diagonal_pixels(cfg.hull_dilation, ds.size)
 args = ([ds.cameras[v] for v in views], ds.masks[views], dilation, cfg.hull_min_views, cfg.free_space_margin)
 depth = today.field_gap_depth(fit_integrator(inputs, state))
-old = before.free_vertices(full, inputs.space, *args)
 alone = today.free_vertices(full, inputs.space, *args)
 told = today.free_vertices(full, inputs.space, *args, depth)
-print(f"free vertices: 5bbba03 {int(old.sum())}, gaps alone {int(alone.sum())}, told {int(told.sum())}; "
-      f"5bbba03's not told {int((old & ~told).sum())}")
+print(f"free vertices: gaps alone {int(alone.sum())}, told {int(told.sum())}")
 # the gaps of three views as free_vertices makes them, and the field's call on each
 pts, real = vertex_positions(full)
 world = inputs.space.to_world_np(pts[real])

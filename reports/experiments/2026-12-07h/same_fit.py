@@ -10,6 +10,8 @@ import sys
 import numpy as np
 
 root, data, out = sys.argv[1:4]
+if os.path.exists(out):
+    raise SystemExit(f"error: {out} exists")
 sys.path[:0] = [root, os.path.join(root, "tests")]  # the checkout's package and test settings
 TINY_FIT = importlib.import_module("conftest").TINY_FIT
 make_dataset = importlib.import_module("mi_voldis.synth.make").make_dataset
