@@ -193,7 +193,7 @@ def test_train_script_errors_name_the_dataset(tmp_path):
 RESUME_SETS = TINY_FIT + ["sh_degree=0", "checkpoint_every=5", "steps_full=80", "lr_views=1"]
 # in contracted space the fit strides through thin cells: a resumed fit takes back the levels it was stepping with;
 # with free_space a resumed stage keeps the free vertices its start chose from the field then
-RESUME_SPACES = {"world": [], "contract": ["space=contract"], "free_space": ["free_space=true"]}
+RESUME_SPACES = {"world": ["free_space=false"], "contract": ["space=contract", "free_space=false"], "free_space": []}
 
 
 @pytest.fixture(scope="module")

@@ -242,10 +242,10 @@ class FitConfig(Settings):
     distortion_object: float = setting(5.0, "factor on the distortion loss of rays inside the object's masks: "
                                             "one peak per object ray (haze left in front of the object would stay "
                                             "in the background and go missing from the foreground)", low=0)
-    free_space: bool = setting(False, "the full phase keeps empty the space the object masks prove free: outside the "
-                                      "visual hull, inside a training view's mask, nearer to that camera than the "
-                                      "hull on the pixel (mi_voldis.fit.free_space); else a fit may draw the object "
-                                      "on a veil in front of it, which the background keeps as its ghost")
+    free_space: bool = setting(True, "the full phase keeps empty the space the object masks prove free: outside the "
+                                     "visual hull, inside a training view's mask, nearer to that camera than the "
+                                     "hull on the pixel (mi_voldis.fit.free_space); false: a fit may draw the "
+                                     "object on a veil in front of it, which the background keeps as its ghost")
     free_space_margin: float = setting(0.02, "with free_space, a point is free only nearer than (1 - this) times the "
                                              "hull's distance on its pixel", low=0, high=0.5)
     near_grad: float = setting(0.0, "near-camera gradient scaling (Floaters No More) in the full field's fit: a "
