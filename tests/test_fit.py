@@ -25,7 +25,9 @@ def test_run_writes_everything(tiny_run):
     m = json.load(open(os.path.join(tiny_run, "metrics.json")))
     for key in ("psnr", "ssim", "bg_psnr", "bg_psnr_mask", "bg_ssim_mask", "fg_coverage_iou", "fg_matte_iou"):
         assert np.isfinite(m["held_out"][key]), key
-    assert m["held_out"]["psnr"] > 14  # 60 steps on 32 x 24 images: far from converged, far from noise
+    # 60 steps on 32 x 24 images: far from converged (a flat mean colour scores about 15 dB there), but learning
+    curve = [r["test_psnr"] for r in json.load(open(os.path.join(tiny_run, "log.json"))) if "test_psnr" in r]
+    assert len(curve) >= 3 and curve[-1] > curve[0] + 3
     assert m["sh_choice"]["degree"] in (0, 1) and m["sh_degree"] == m["sh_choice"]["degree"]
     assert m["seconds"]["phase_full"] > 0 and m["seconds"]["phase_bg"] > 0 and m["msps_mean"] > 0
     assert 0 < m["evaluated_samples_per_ray"] <= m["max_samples_per_ray"] and m["step_size"] > 0
