@@ -1,6 +1,7 @@
 """What the benchmark measures of a run folder, and how it reads the removal family."""
 import os
 
+import numpy as np
 import pytest
 
 from mi_voldis.bench.run import folder_bytes
@@ -83,18 +84,25 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
     assert not finished(str(old), dataset, TINY_FIT + ["host_ms=5"])
 
 
-def family_results(margins, outside=None):
+def family_results(margins, outside=None, legacy=()):
     """Removal-family results (mi_voldis.bench.family) with the default row's in-mask PSNR 20 + margin
     over Telea (20) and Navier-Stokes (19) per scene: {scene: (half, margin)}; outside the mask 30 dB, or
-    20 + ``outside[scene]``."""
+    20 + ``outside[scene]``. Per held-out view (0, 8, 16): the volume 20 + margin - 2, + 0, + 2, Telea 21,
+    20, 19 and Navier-Stokes 19, 18.5, 19.5, so the better 2D fill of each view is 21, 20, 19.5; the scenes
+    of ``legacy`` were scored before the per-view figures were kept."""
     scenes = {}
     for scene, (half, margin) in margins.items():
         methods = {"volume": {"psnr_mask": 20.0 + margin, "psnr_outside": 20.0 + (outside or {}).get(scene, 10.0),
                               "psnr_unseen": 18.0, "consistency_psnr": 30.0,
                               "fg_coverage_iou": 0.95, "bg_haze_mask": 0.02, "bg_haze_outside": 0.03,
-                              "residue": 0.05},
-                   "telea": {"psnr_mask": 20.0, "consistency_psnr": 25.0},
-                   "ns": {"psnr_mask": 19.0, "consistency_psnr": 26.5}}
+                              "residue": 0.05, "views": [0, 8, 16],
+                              "psnr_mask_views": [18.0 + margin, 20.0 + margin, 22.0 + margin]},
+                   "telea": {"psnr_mask": 20.0, "consistency_psnr": 25.0, "psnr_mask_views": [21.0, 20.0, 19.0]},
+                   "ns": {"psnr_mask": 19.0, "consistency_psnr": 26.5, "psnr_mask_views": [19.0, 18.5, 19.5]}}
+        if scene in legacy:
+            for m in methods.values():
+                m.pop("views", None)
+                m.pop("psnr_mask_views")
         scenes[scene] = {"half": half, "kind": "arc", "seed": 1000,
                          "strategies": {s: {"methods": methods} for s in ("guided", "guided+hole_carve")}}
     return {"date": "2026-11-26", "seconds": 60.0, "machine": {"cpu": "test", "cores": 2}, "scenes": scenes}
@@ -103,7 +111,7 @@ def family_results(margins, outside=None):
 def test_the_family_report_leads_with_the_check_halfs_worst_scene_not_the_tunings():
     from mi_voldis.bench.family import lead, summary
     results = family_results({"family00": ("tuning", -3.0), "family10": ("check", 2.5), "family11": ("check", 1.5),
-                              "family12": ("check", 4.0)}, outside={"family11": 1.9})
+                              "family12": ("check", 4.0)}, outside={"family11": 1.9}, legacy=("family00",))
     check = summary(results, "guided", "check")
     assert check["worst"] == ("family11", 1.5) and check["n"] == 3
     assert check["bound"] == ["family11"]  # its background outside the mask is 1.9 dB over Telea inside it
@@ -112,8 +120,13 @@ def test_the_family_report_leads_with_the_check_halfs_worst_scene_not_the_tuning
     assert summary(results, "guided", "tuning")["worst"] == ("family00", -3.0)
     text = "\n".join(lead(results))
     assert "check half: worst family11 +1.50 dB" in text and "2 of 3 scenes meet every target" in text
-    assert "under +2 dB even outside the mask: family11." in text
-    assert "| family11 | arc | guided | 21.50 | 18.00 | 20.00 | +1.50 | +1.90 | 30.00 |" in text
+    assert "under +2 dB even outside the mask: family11; " in text
+    # per view: family11 -1.50, +1.50, +4.00; family10 -0.50, +2.50, +5.00; family12 +1.00, +4.00, +6.50
+    assert check["views"] == 9 and check["views_under"] == 2 and check["worst_view"] == ("family11", 0, -1.5)
+    assert "held-out views under the better 2D fill of that view: 2 of 9 (worst: family11 view 0, -1.50 dB)" in text
+    assert "| family11 | arc | guided | 21.50 | 18.00 | 20.00 | +1.50 | +1.90 | 1 / 3 (-1.50) | 30.00 |" in text
+    assert "| family12 | arc | guided | 24.00 | 18.00 | 20.00 | +4.00 | +10.00 | 0 / 3 (+1.00) | 30.00 |" in text
+    assert "| family00 | arc | guided | 17.00 | 18.00 | 20.00 | -3.00 | +10.00 | - | 30.00 |" in text  # scored before
     assert text.index("### Check half") < text.index("### Tuning half")
 
 
@@ -267,8 +280,13 @@ def test_a_row_scores_the_background_as_the_runs_scene_renders_it_occupancy_grid
     assert metrics["occupied_fraction"] < 1.0
     own = [r["bg_psnr_mask"] for r in metrics["per_view"]]
     strategies([run, "guided", str(tmp_path / "reused")])
-    scored = json.loads((tmp_path / "reused" / "metrics.json").read_text())["methods"]["volume"]["psnr_mask"]
-    assert abs(scored - sum(own) / len(own)) < 1e-4
+    methods = json.loads((tmp_path / "reused" / "metrics.json").read_text())["methods"]
+    assert abs(methods["volume"]["psnr_mask"] - sum(own) / len(own)) < 1e-4
+    # and view by view, in the order of the run's held-out views, beside the 2D fills' own
+    assert methods["volume"]["views"] == [r["view"] for r in metrics["per_view"]]
+    assert np.allclose(methods["volume"]["psnr_mask_views"], own, atol=1e-4)
+    for name in ("telea", "ns"):
+        assert abs(np.mean(methods[name]["psnr_mask_views"]) - methods[name]["psnr_mask"]) < 1e-9
 
 
 def test_a_refit_never_writes_into_its_run_its_dataset_or_a_folder_it_did_not_fill(tiny_run, tiny_dataset, tmp_path):

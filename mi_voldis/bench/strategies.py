@@ -133,9 +133,11 @@ def evaluate(ds, integrator, hull_min_views=0.9):
             r["psnr_outside"].append(psnr(by_view[v], gt, ~region))
             r["residue"].append(object_residue(by_view[v], ds.images[v], gt, ds.masks[v]))
         rows[name] = {k: mean_defined(x) for k, x in r.items()}  # None where no view defines it
+        rows[name]["psnr_mask_views"] = [float(x) for x in r["psnr_mask"]]  # per view, in the order of "views"
         rows[name]["consistency_psnr"] = consistency(ds, tests, by_view, depth, dil)
     full_out = [psnr(np.clip(renders[v]["full"][0], 0, 1), ds.backgrounds[v], ~dilate(ds.masks[v], dil))
                 for v in scored]
+    rows["volume"]["views"] = [int(v) for v in scored]
     rows["volume"]["full_psnr_outside"] = float(np.mean(full_out)) if full_out else None
     # the metric's reference: the ground-truth background itself, warped the same way (what a correct
     # answer scores through the volume's depth)
