@@ -1179,6 +1179,42 @@ def test_hole_carving_adds_the_unseen_space_before_the_floor_and_nothing_on_or_u
     assert shell.sum() > 20 and obj[shell].mean() > 0.9
 
 
+def test_the_cells_voted_at_or_under_the_hidden_floor_are_the_floors_and_what_lies_under_it(tmp_path):
+    """``object_behind_fill`` gives back to the fill the object's cells that the masked views vote at or
+    behind the surface the object hides (:func:`behind_hidden_surface`). Asked of every hull cell of the
+    sphere on the floor: some are voted so, every one lies within a voxel and a half of the floor or under
+    it, and nearly all the hull's cells under the floor below the sphere are; none of the sphere above it."""
+    from mi_voldis.fit.background import behind_hidden_surface
+    from mi_voldis.fit.lift import training_depths
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
+    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, 0.9, 0.99), fields={"full": full})
+    inputs = FitInputs.of(ds, cfg, str(tmp_path / "state.npz"), False)
+    hull = object_cells(tmp_path)[2]
+    got = np.array(behind_hidden_surface(inputs, full, mi.Bool(hull), training_depths(inputs, state, median=True)))
+    pts, real = vertex_positions(full)
+    voxel = 2.0 / 39
+    assert got.sum() > 0 and not (got & ~hull).any()
+    assert (pts[got, 1] < FLOOR_Y + 1.5 * voxel).all()
+    under = real & hull & (pts[:, 1] < FLOOR_Y - 1.5 * voxel) & (np.hypot(pts[:, 0], pts[:, 2]) < 0.15)
+    assert under.sum() > 10 and got[under].mean() > 0.9
+    sphere = np.linalg.norm(pts - np.array([0.0, FLOOR_Y + 0.3, 0.0]), axis=1) < 0.3
+    assert not got[sphere & (pts[:, 1] > FLOOR_Y + 1.5 * voxel)].any()
+
+
+def test_the_fill_takes_back_exactly_the_objects_cells_voted_at_or_under_the_hidden_floor(tmp_path):
+    """With ``object_behind_fill`` (the default) the object's cells are those without it less what
+    :func:`behind_hidden_surface` votes at or under the floor among them."""
+    from mi_voldis.fit.background import behind_hidden_surface
+    from mi_voldis.fit.lift import training_depths
+    on = object_cells(tmp_path / "on", hole_carve=False)[3]
+    off = object_cells(tmp_path / "off", hole_carve=False, object_behind_fill=False)[3]
+    ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
+    state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, 0.9, 0.99), fields={"full": full})
+    inputs = FitInputs.of(ds, cfg, str(tmp_path / "state.npz"), False)
+    behind = np.array(behind_hidden_surface(inputs, full, mi.Bool(off), training_depths(inputs, state, median=True)))
+    np.testing.assert_array_equal(on, off & ~behind)
+
+
 def test_the_inpainting_hole_takes_in_occluders_in_front_of_the_object_only():
     """Around a mask whose object stands at depth 2 in front of a wall at 5, a post at depth 1 touching
     the mask joins the hole (within the ring), the wall does not, nor the post beyond the ring."""
