@@ -1202,12 +1202,12 @@ def test_the_cells_voted_at_or_under_the_hidden_floor_are_the_floors_and_what_li
 
 
 def test_the_fill_takes_back_exactly_the_objects_cells_voted_at_or_under_the_hidden_floor(tmp_path):
-    """With ``object_behind_fill`` (the default) the object's cells are those without it less what
+    """With ``object_behind_fill`` the object's cells are those without it (the default) less what
     :func:`behind_hidden_surface` votes at or under the floor among them."""
     from mi_voldis.fit.background import behind_hidden_surface
     from mi_voldis.fit.lift import training_depths
-    on = object_cells(tmp_path / "on", hole_carve=False)[3]
-    off = object_cells(tmp_path / "off", hole_carve=False, object_behind_fill=False)[3]
+    on = object_cells(tmp_path / "on", hole_carve=False, object_behind_fill=True)[3]
+    off = object_cells(tmp_path / "off", hole_carve=False)[3]
     ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
     state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, 0.9, 0.99), fields={"full": full})
     inputs = FitInputs.of(ds, cfg, str(tmp_path / "state.npz"), False)
