@@ -1199,15 +1199,21 @@ def test_the_cells_voted_at_or_under_the_hidden_floor_are_the_floors_and_what_li
     assert under.sum() > 10 and got[under].mean() > 0.9
     sphere = np.linalg.norm(pts - np.array([0.0, FLOOR_Y + 0.3, 0.0]), axis=1) < 0.3
     assert not got[sphere & (pts[:, 1] > FLOOR_Y + 1.5 * voxel)].any()
+    # within two voxels of the candidates' lowest heights alone (the up is +y here: level cameras)
+    low = np.array(behind_hidden_surface(inputs, full, mi.Bool(hull), training_depths(inputs, state, median=True),
+                                         layers=2.0))
+    bottom = np.percentile(pts[real & hull, 1], 1)
+    assert low.sum() > 0 and not (low & ~got).any()
+    np.testing.assert_array_equal(low, got & (pts[:, 1] < bottom + 2 * voxel))
 
 
 def test_the_fill_takes_back_exactly_the_objects_cells_voted_at_or_under_the_hidden_floor(tmp_path):
-    """With ``object_behind_fill`` the object's cells are those without it (the default) less what
-    :func:`behind_hidden_surface` votes at or under the floor among them."""
+    """With ``object_behind_fill`` (the default, over all the object's cells here) the object's cells are
+    those without it less what :func:`behind_hidden_surface` votes at or under the floor among them."""
     from mi_voldis.fit.background import behind_hidden_surface
     from mi_voldis.fit.lift import training_depths
-    on = object_cells(tmp_path / "on", hole_carve=False, object_behind_fill=True)[3]
-    off = object_cells(tmp_path / "off", hole_carve=False)[3]
+    on = object_cells(tmp_path / "on", hole_carve=False, object_behind_layers=0.0)[3]
+    off = object_cells(tmp_path / "off", hole_carve=False, object_behind_fill=False)[3]
     ds, cfg, full, FitInputs, FitState, Adam = synthetic_object_scene()
     state = FitState(np.array([-1.0] * 3), np.array([1.0] * 3), Adam({}, 0.9, 0.99), fields={"full": full})
     inputs = FitInputs.of(ds, cfg, str(tmp_path / "state.npz"), False)

@@ -59,12 +59,14 @@ def test_a_run_recorded_before_a_setting_was_added_is_still_finished(tiny_run, t
     assert set(FitConfig.ADDED) <= set(config)
     # the settings it was fitted with as a run before them would have been; those whose default has
     # changed since (sh_color, hull_fill_vertical, sh_gate, sh_view_resolution, sh_view_from, fringe_contrast,
-    # the fitted scene's rules, the counted last stage, the averaged iterates, the masks' free space) read back
+    # the fitted scene's rules, the counted last stage, the averaged iterates, the masks' free space, the
+    # object's cells on the floor it stands on) read back
     # as the old value
     changed = {key for key, value in FitConfig.ADDED.items() if config[key] != value}
     assert changed == {"sh_color", "hull_fill_vertical", "sh_gate", "sh_view_resolution", "sh_view_from",
                        "fringe_contrast", "scene_occupancy_voxels", "scene_stop_transmittance", "scene_strides",
-                       "strides", "sample_ns", "float_ns", "average_window", "free_space"}
+                       "strides", "sample_ns", "float_ns", "average_window", "free_space",
+                       "object_behind_fill"}
     for key in FitConfig.ADDED:
         if key not in changed:
             del config[key]
@@ -104,7 +106,7 @@ def family_results(margins, outside=None, legacy=()):
                 m.pop("views", None)
                 m.pop("psnr_mask_views")
         scenes[scene] = {"half": half, "kind": "arc", "seed": 1000,
-                         "strategies": {s: {"methods": methods} for s in ("guided", "guided+object_behind_fill")}}
+                         "strategies": {s: {"methods": methods} for s in ("guided", "guided-object_behind_fill")}}
     return {"date": "2026-11-26", "seconds": 60.0, "machine": {"cpu": "test", "cores": 2}, "scenes": scenes}
 
 

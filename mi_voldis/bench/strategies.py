@@ -37,7 +37,8 @@ PREVIEWS = 4  # held-out views previewed when the dataset has neither ground tru
 # the background strategies' own settings (bg_strategy first): a refit takes today's defaults for them, so
 # that a run fitted under older defaults is scored with the strategy the default command runs now
 BACKGROUND_SETTINGS = ("bg_strategy", "prior_weight", "prior_rays", "prior_views", "prior_inpainter", "object_alpha",
-                       "object_front", "object_behind_fill", "hole_carve", "hole_carve_margin", "hole_carve_behind",
+                       "object_front", "object_behind_fill", "object_behind_layers",
+                       "hole_carve", "hole_carve_margin", "hole_carve_behind",
                        "keep_seen", "keep_seen_gap", "seen_surface_tol", "hull_color_fill", "hull_fill_vertical",
                        "hull_occluders", "shadow_contrast", "fringe_contrast", "fringe_width", "fringe_unseen",
                        "bg_lr_density", "bg_lr_color", "bg_tv_density", "bg_tv_color")

@@ -335,7 +335,7 @@ def background_regions(inputs, state, neighbours=None, with_solid=False, depths=
             through = seen_through(inputs, full, (hull > 0) & ~refill, depth)
             refill |= through
     if cfg.object_behind_fill:  # the surface the object stands on stays whole under its outline
-        obj &= ~behind_hidden_surface(inputs, full, obj, depth)
+        obj &= ~behind_hidden_surface(inputs, full, obj, depth, cfg.object_behind_layers)
     solid = None
     if cfg.hole_carve:  # unseen space before the hidden surface (the object's or empty) and far behind it
         carve, solid = hole_shell(inputs, full, unseen, depth)
@@ -344,22 +344,32 @@ def background_regions(inputs, state, neighbours=None, with_solid=False, depths=
     return out + (through,) if with_through else out
 
 
-def behind_hidden_surface(inputs, field, candidates, depth):
+def behind_hidden_surface(inputs, field, candidates, depth, layers=0.0):
     """Bool per stored vertex of ``field``: among ``candidates`` (Bool per stored vertex), those the masked
     training views of ``depth`` (view -> full-field median depth map) vote at or behind the surface the
     object hides (:func:`~mi_voldis.fit.visibility.hidden_surface_side`, masks grown by 1% of the diagonal
-    as :func:`hole_shell`'s). Where the object stands on a floor its base and the floor share cells: the
-    floor's vertices under its outline hold both, no view sees them unmasked, and emptied with the object
-    they leave a gap in the floor along the outline (a ring in the hole, the floor's underside or nothing
-    showing through). Left to the fill, the floor continues whole; the foreground, w_full - w_bg, loses
-    the object's density in those cells (its lowest layer of voxels)."""
+    as :func:`hole_shell`'s); with ``layers`` > 0 only those within that many voxels of the candidates'
+    lowest height (their 1st percentile along the cameras' up, :func:`~mi_voldis.cameras.world_up`). Where the
+    object stands on a floor its base and the floor share cells: the floor's vertices under its outline hold
+    both, no view sees them unmasked, and emptied with the object they leave a gap in the floor along the
+    outline (a ring in the hole, the floor's underside or nothing showing through). Left to the fill, the
+    floor continues whole; the foreground, w_full - w_bg, loses the object's density in those cells. Higher
+    up the vote can be wrong: over a hazy full field the depth filled into a mask comes too near, and the
+    object's upper parts would go to the background with the floor."""
     ds = inputs.ds
     pts_scene, real = vertex_positions(field)
     pick = np.flatnonzero(np.array(candidates) & real)
     views = [v for v in depth if v in set(int(u) for u in ds.masked_train)]
-    _, _, beyond = hidden_surface_side(inputs.space.to_world_np(pts_scene[pick]), [ds.cameras[v] for v in views],
-                                       [depth[v] for v in views], [ds.masks[v] for v in views],
-                                       diagonal_pixels(0.01, ds.size), inputs.cfg.hole_carve_margin, 0.0)
+    world = inputs.space.to_world_np(pts_scene[pick])
+    _, _, beyond = hidden_surface_side(world, [ds.cameras[v] for v in views], [depth[v] for v in views],
+                                       [ds.masks[v] for v in views], diagonal_pixels(0.01, ds.size),
+                                       inputs.cfg.hole_carve_margin, 0.0)
+    if layers > 0 and len(pick):
+        height = world @ world_up([ds.cameras[i] for i in ds.train])
+        # a voxel in world units: the space's scale at its centre (the unit ball, where a contraction is linear)
+        scale = float(np.linalg.norm(np.diff(inputs.space.to_world_np(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])),
+                                             axis=0)))
+        beyond &= height < np.percentile(height, 1) + layers * voxel_of(field) * scale
     out = np.zeros(len(pts_scene), bool)
     out[pick[beyond]] = True
     return mi.Bool(out)

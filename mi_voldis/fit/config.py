@@ -82,7 +82,8 @@ class FitConfig(Settings):
              "lr_views_growth": False, "contract_radius": 1.0, "checkpoint_minutes": 2.0, "hull_fill_vertical": 1.0,
              "sh_gate": False, "sh_view_resolution": None, "sh_view_from": 0.0, "fringe_contrast": 0.0,
              "scene_occupancy_voxels": 4, "scene_stop_transmittance": 1e-4, "scene_strides": False,
-             "strides": "none", "sample_ns": None, "float_ns": 0.0, "average_window": 0.0, "free_space": False}
+             "strides": "none", "sample_ns": None, "float_ns": 0.0, "average_window": 0.0, "free_space": False,
+             "object_behind_fill": False}
 
     # ---- scene space
     space: str = setting("auto", "where the fields live: 'contract' (all of space, Mip-NeRF 360's contraction), "
@@ -353,16 +354,18 @@ class FitConfig(Settings):
                                        "sees unmasked are the object too, however faint: the prior cannot paint "
                                        "the background over the object, so the foreground layer covers it whole "
                                        "(bg_strategy 'harmonic', 'guided')")
-    object_behind_fill: bool = setting(False, "the object's voxels that the masked training views vote at or behind "
-                                              "the surface it hides (each view's full-field depth around its mask "
-                                              "filled into it as disparity; the floor it stands on) take the hull's "
-                                              "fill instead of being emptied (bg_strategy 'harmonic', 'guided'): "
-                                              "emptied, they cut that surface along the object's outline, a ring "
-                                              "where it stood; the foreground loses the object's voxels there (off "
-                                              "by default: on the removal family it lifts the worst scene of both "
-                                              "halves but lowers the foreground's coverage on six check scenes, "
-                                              "where a hazy full field's filled depth comes too near and the "
-                                              "object's upper parts are voted behind it; reports/notes.md)")
+    object_behind_fill: bool = setting(True, "the object's voxels that the masked training views vote at or behind "
+                                             "the surface it hides (each view's full-field depth around its mask "
+                                             "filled into it as disparity; the floor it stands on), within "
+                                             "object_behind_layers of its lowest, take the hull's fill instead of "
+                                             "being emptied (bg_strategy 'harmonic', 'guided'): emptied, they cut "
+                                             "that surface along the object's outline, a ring where it stood; the "
+                                             "foreground loses the object's voxels there (reports/notes.md)")
+    object_behind_layers: float = setting(2.0, "with object_behind_fill, only the object's voxels within this many "
+                                               "voxels of its lowest (1st percentile height along the cameras' up): "
+                                               "the floor it stands on, not its upper parts that a hazy field's "
+                                               "filled depth votes behind the surface (0: all; on the removal family "
+                                               "all cost the foreground's coverage on six check scenes)", low=0)
     hole_carve: bool = setting(False, "unseen hull voxels that the masked training views vote in front of the surface "
                                      "the object hides (each view's full-field depth around its mask filled into it "
                                      "as disparity), or far behind it, are emptied in bg and kept so, as the "
