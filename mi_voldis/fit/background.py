@@ -309,7 +309,9 @@ def background_regions(inputs, state, neighbours=None, with_solid=False, depths=
     in front of it on a masked ray (:func:`masked_ray_cells`). The walls and floor around the object
     that some view sees are no part of it, however opaque, so a low ``object_alpha`` can take in the
     object's soft edge without carving the surfaces beside it; nor is the density hidden behind it,
-    where the refit continues the background. With ``hole_carve`` the object's voxels also take in the
+    where the refit continues the background; with ``object_behind_fill`` nor are the lowest of them that
+    the masked views vote at or behind the surface it hides (:func:`behind_hidden_surface`: the floor it
+    stands on stays whole). With ``hole_carve`` the object's voxels also take in the
     unseen hull vertices in front of the surface the object hides or far behind it (:func:`hole_shell`),
     however faint; ``with_solid``: also (5th) the unseen vertices from that surface on, which the
     background starts opaque (None without ``hole_carve``). With ``keep_seen`` and ``seen_surface_tol``, the
