@@ -10,20 +10,16 @@ import dataclasses
 import os
 import sys
 
-import mitsuba as mi
 import numpy as np
-from PIL import Image
 
 import mi_voldis  # noqa: F401
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "2026-11-30b"))
-from probe_run import load_run  # noqa: E402
+from probe_run import knockout_sheet, load_run  # noqa: E402
 
 from mi_voldis.field.state import density_of, vertex_positions  # noqa: E402
-from mi_voldis.fit.background import emptied, fringe_vertices, start_harmonic, voxel_of  # noqa: E402
-from mi_voldis.fit.fields import fit_integrator  # noqa: E402
+from mi_voldis.fit.background import fringe_vertices, start_harmonic, voxel_of  # noqa: E402
 from mi_voldis.fit.train import object_fringe  # noqa: E402
-from mi_voldis.render.views import render_camera  # noqa: E402
 
 if len(sys.argv) != 5:
     raise SystemExit("usage: python start_knockout.py RUN DATA OUT.png VIEWS")
@@ -48,12 +44,4 @@ classes = {"none": np.zeros_like(hull_np), "kept": hull_np & ~refill,
            "kept, denser than 0.2": hull_np & ~refill & (alpha > 0.2),
            "refilled, not the object's": hull_np & refill & ~obj, "seen through the fringe alone": hull_np & fringe}
 start = state.fields["bg"]
-tiles = []
-for name, region in classes.items():
-    state.fields["bg"] = emptied(inputs, state, start, mi.Bool(region))
-    integrator = fit_integrator(inputs, state)
-    row = [np.clip(render_camera(integrator, ds.cameras[v], ("bg",))["bg"][0], 0, 1) for v in views]
-    tiles.append(np.concatenate(row, 1))
-    print(f"{name}: {int(region.sum())} vertices emptied", flush=True)
-image = Image.fromarray((np.concatenate(tiles, 0) * 255).astype(np.uint8))
-image.resize((2 * image.width, 2 * image.height)).save(out)
+knockout_sheet(inputs, state, start, classes, views, out)

@@ -12,18 +12,15 @@ import sys
 
 import mitsuba as mi
 import numpy as np
-from PIL import Image
 
 import mi_voldis  # noqa: F401
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "2026-11-30b"))
-from probe_run import load_run  # noqa: E402
+from probe_run import knockout_sheet, load_run  # noqa: E402
 
 from mi_voldis.field.state import dilate_vertices, neighbour_vertices, vertex_positions  # noqa: E402
-from mi_voldis.fit.background import emptied, start_harmonic  # noqa: E402
-from mi_voldis.fit.fields import fit_integrator  # noqa: E402
+from mi_voldis.fit.background import start_harmonic  # noqa: E402
 from mi_voldis.fit.train import object_fringe  # noqa: E402
-from mi_voldis.render.views import render_camera  # noqa: E402
 
 if len(sys.argv) != 4:
     raise SystemExit("usage: python final_knockout.py RUN OUT.png VIEWS")
@@ -46,12 +43,4 @@ near = np.array(dilate_vertices(mi.Bool(obj_np), neighbour_vertices(full), 2))
 classes = {"none": np.zeros_like(hull_np), "kept": hull_np & ~refill_np,
            "kept within 2 of the object's": hull_np & ~refill_np & near,
            "refilled, not the object's": hull_np & refill_np & ~obj_np, "the object's": obj_np}
-tiles = []
-for name, region in classes.items():
-    state.fields["bg"] = emptied(inputs, state, final, mi.Bool(region))
-    integrator = fit_integrator(inputs, state)
-    row = [np.clip(render_camera(integrator, ds.cameras[v], ("bg",))["bg"][0], 0, 1) for v in views]
-    tiles.append(np.concatenate(row, 1))
-    print(f"{name}: {int(region.sum())} vertices emptied", flush=True)
-image = Image.fromarray((np.concatenate(tiles, 0) * 255).astype(np.uint8))
-image.resize((2 * image.width, 2 * image.height)).save(out)
+knockout_sheet(inputs, state, final, classes, views, out)
